@@ -1,0 +1,179 @@
+//! The container (SPEC.md §2): magic, version, section table, CRC-32.
+
+use crate::consts::{self, CRC_LEN, MAX_SECTIONS, PREAMBLE_LEN, SECTION_ENTRY_LEN};
+use crate::error::Error;
+use crate::header::Header;
+use crate::reader::Reader;
+
+/// CRC-32/ISO-HDLC (the zlib/PNG CRC), SPEC.md §2.3.
+pub(crate) const CRC32: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+
+/// One section of a clip: its id and its bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Section<'a> {
+    /// Section id (SPEC.md §2.2).
+    pub id: u8,
+    /// The section's payload.
+    pub bytes: &'a [u8],
+}
+
+/// Iterator over the sections of a validated clip, in table order.
+#[derive(Clone, Debug)]
+pub struct Sections<'a> {
+    file: &'a [u8],
+    table: Reader<'a>,
+    left: u16,
+}
+
+impl<'a> Iterator for Sections<'a> {
+    type Item = Section<'a>;
+
+    fn next(&mut self) -> Option<Section<'a>> {
+        if self.left == 0 {
+            return None;
+        }
+        self.left -= 1;
+        let (id, range) = read_entry(&mut self.table)?;
+        Some(Section {
+            id,
+            bytes: self.file.get(range)?,
+        })
+    }
+}
+
+fn read_entry(r: &mut Reader<'_>) -> Option<(u8, core::ops::Range<usize>)> {
+    let id = r.u8()?;
+    let reserved = r.take(3)?;
+    if reserved != [0, 0, 0] {
+        return None;
+    }
+    let offset = usize::try_from(r.u32_le()?).ok()?;
+    let len = usize::try_from(r.u32_le()?).ok()?;
+    Some((id, offset..offset.checked_add(len)?))
+}
+
+/// A parsed, validated clip borrowing its bytes (zero copy).
+#[derive(Clone, Copy, Debug)]
+pub struct Clip<'a> {
+    bytes: &'a [u8],
+    section_count: u16,
+    header: Header<'a>,
+    codec_id: u8,
+    codec: &'a [u8],
+}
+
+impl<'a> Clip<'a> {
+    /// Validates a whole clip: container, CRC, header and codec section
+    /// (SPEC.md §2–§4). After this succeeds every frame can be decoded.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(bytes);
+        let truncated = |needed: usize| Error::ContainerTruncated {
+            needed,
+            available: bytes.len(),
+        };
+        let magic = r.take(4).ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+        if magic != consts::MAGIC {
+            return Err(Error::ContainerBadMagic);
+        }
+        let version = r.u8().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+        if version != consts::VERSION {
+            return Err(Error::ContainerUnsupportedVersion { version });
+        }
+        let flags = r.u8().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+        if flags != 0 {
+            return Err(Error::ContainerUnsupportedFlags { flags });
+        }
+        let count = r.u16_le().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+        if count == 0 || usize::from(count) > MAX_SECTIONS {
+            return Err(Error::ContainerSectionCount { count });
+        }
+        let body_start = PREAMBLE_LEN + usize::from(count) * SECTION_ENTRY_LEN;
+        let needed = body_start + CRC_LEN;
+        if bytes.len() < needed {
+            return Err(truncated(needed));
+        }
+        let crc_at = bytes.len() - CRC_LEN;
+        let (body, crc_bytes) = bytes.split_at(crc_at);
+        let stored = match crc_bytes {
+            [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
+            _ => return Err(truncated(needed)),
+        };
+        let computed = CRC32.checksum(body);
+        if stored != computed {
+            return Err(Error::ContainerCrcMismatch { stored, computed });
+        }
+
+        let mut seen = [false; 256];
+        let mut header = None;
+        let mut codec = None;
+        for _ in 0..count {
+            let at = r.pos();
+            let id = bytes.get(at).copied().unwrap_or(0);
+            let (id, range) = read_entry(&mut r).ok_or(Error::ContainerSectionBounds { id })?;
+            if range.start < body_start || range.end > crc_at {
+                return Err(Error::ContainerSectionBounds { id });
+            }
+            let slot = seen.get_mut(usize::from(id)).ok_or(Error::ContainerSectionBounds { id })?;
+            if *slot {
+                return Err(Error::ContainerDuplicateSection { id });
+            }
+            *slot = true;
+            let payload = bytes.get(range).ok_or(Error::ContainerSectionBounds { id })?;
+            match id {
+                consts::SECTION_HEADER => header = Some(payload),
+                consts::SECTION_CODEC_INDEX => {
+                    if codec.is_some() {
+                        return Err(Error::ContainerDuplicateSection { id });
+                    }
+                    codec = Some((id, payload));
+                }
+                0x80..=0xFF => {} // ancillary: skipped by this decoder
+                _ => return Err(Error::ContainerUnknownSection { id }),
+            }
+        }
+        let header = Header::parse(header.ok_or(Error::ContainerMissingSection {
+            id: consts::SECTION_HEADER,
+        })?)?;
+        let (codec_id, codec) = codec.ok_or(Error::ContainerNoCodec)?;
+        let clip = Clip {
+            bytes,
+            section_count: count,
+            header,
+            codec_id,
+            codec,
+        };
+        // Validate the codec section now so that playing never meets a
+        // structural error later.
+        crate::player::validate_codec(&clip)?;
+        Ok(clip)
+    }
+
+    /// The header: timing, skeleton, channel table.
+    pub fn header(&self) -> &Header<'a> {
+        &self.header
+    }
+
+    /// The whole clip's bytes.
+    pub fn bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// Id of the codec section (SPEC.md §2.2).
+    pub fn codec_id(&self) -> u8 {
+        self.codec_id
+    }
+
+    /// The codec section's bytes.
+    pub(crate) fn codec_bytes(&self) -> &'a [u8] {
+        self.codec
+    }
+
+    /// All sections, in table order (ancillary ones included).
+    pub fn sections(&self) -> Sections<'a> {
+        Sections {
+            file: self.bytes,
+            table: Reader::new(self.bytes.get(PREAMBLE_LEN..).unwrap_or(&[])),
+            left: self.section_count,
+        }
+    }
+}

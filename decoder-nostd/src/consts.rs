@@ -1,0 +1,58 @@
+//! Constants shared by the encoder and the decoder (SPEC.md §2–§4).
+//! The encoder imports this module; nothing here is duplicated elsewhere.
+
+/// File magic, SPEC.md §2.1.
+pub const MAGIC: [u8; 4] = *b"MOCB";
+/// Current bitstream version, SPEC.md §2.1.
+pub const VERSION: u8 = 1;
+/// Bytes before the section table: magic(4) version(1) flags(1) count(2).
+pub const PREAMBLE_LEN: usize = 8;
+/// Bytes per section-table entry: id(1) reserved(3) offset(4) length(4).
+pub const SECTION_ENTRY_LEN: usize = 12;
+/// Length of the trailing CRC-32.
+pub const CRC_LEN: usize = 4;
+/// Largest number of sections a file may declare.
+pub const MAX_SECTIONS: usize = 16;
+
+/// Section id of the header (frame timing, skeleton, channel table), §3.
+pub const SECTION_HEADER: u8 = 0x01;
+/// Section id of the `index` codec payload, §4.
+pub const SECTION_CODEC_INDEX: u8 = 0x10;
+
+/// Channel kind codes, SPEC.md §3.2 (`kind` field).
+pub mod kind {
+    /// Translation along X.
+    pub const X_POSITION: u8 = 0;
+    /// Translation along Y.
+    pub const Y_POSITION: u8 = 1;
+    /// Translation along Z.
+    pub const Z_POSITION: u8 = 2;
+    /// Rotation about X.
+    pub const X_ROTATION: u8 = 3;
+    /// Rotation about Y.
+    pub const Y_ROTATION: u8 = 4;
+    /// Rotation about Z.
+    pub const Z_ROTATION: u8 = 5;
+}
+
+/// Fixed-point units, SPEC.md §3.3 (`unit` field).
+pub mod unit {
+    /// 1/1000 degree.
+    pub const MILLIDEGREE: u8 = 0;
+    /// 1/1000 millimetre.
+    pub const MICROMETRE: u8 = 1;
+}
+
+/// Index codec constants, SPEC.md §4.
+pub mod index {
+    /// Bytes of one channel descriptor (§4.2).
+    pub const DESCRIPTOR_LEN: usize = 8;
+    /// Largest index width in bits.
+    pub const MAX_BITS: u8 = 12;
+    /// Largest table shift.
+    pub const MAX_SHIFT: u8 = 24;
+    /// Descriptor flag: add the looked-up value to the previous frame's value.
+    pub const FLAG_ACCUMULATE: u8 = 0x80;
+    /// Mask of the shift in descriptor byte 1.
+    pub const SHIFT_MASK: u8 = 0x1F;
+}

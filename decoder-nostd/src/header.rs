@@ -1,0 +1,348 @@
+//! The header section (SPEC.md §3): frame timing, the skeleton and the
+//! channel table. [`Header::parse`] validates every field once; the
+//! iterators then walk the same bytes again without allocating.
+
+use crate::consts;
+use crate::error::Error;
+use crate::reader::Reader;
+
+/// What a channel moves (SPEC.md §3.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ChannelKind {
+    /// Translation along X.
+    Xposition,
+    /// Translation along Y.
+    Yposition,
+    /// Translation along Z.
+    Zposition,
+    /// Rotation about X.
+    Xrotation,
+    /// Rotation about Y.
+    Yrotation,
+    /// Rotation about Z.
+    Zrotation,
+}
+
+impl ChannelKind {
+    /// Decodes a kind code of §3.2.
+    pub fn from_code(code: u8) -> Option<Self> {
+        match code {
+            consts::kind::X_POSITION => Some(ChannelKind::Xposition),
+            consts::kind::Y_POSITION => Some(ChannelKind::Yposition),
+            consts::kind::Z_POSITION => Some(ChannelKind::Zposition),
+            consts::kind::X_ROTATION => Some(ChannelKind::Xrotation),
+            consts::kind::Y_ROTATION => Some(ChannelKind::Yrotation),
+            consts::kind::Z_ROTATION => Some(ChannelKind::Zrotation),
+            _ => None,
+        }
+    }
+
+    /// The BVH name of the kind, e.g. `Zrotation`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ChannelKind::Xposition => "Xposition",
+            ChannelKind::Yposition => "Yposition",
+            ChannelKind::Zposition => "Zposition",
+            ChannelKind::Xrotation => "Xrotation",
+            ChannelKind::Yrotation => "Yrotation",
+            ChannelKind::Zrotation => "Zrotation",
+        }
+    }
+}
+
+/// Fixed-point unit of a channel's decoded integers (SPEC.md §3.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Unit {
+    /// 1/1000 degree. Angles are unwrapped (continuous), so they may leave
+    /// ±180°.
+    Millidegree,
+    /// 1/1000 millimetre.
+    Micrometre,
+}
+
+impl Unit {
+    /// Decodes a unit code of §3.3.
+    pub fn from_code(code: u8) -> Option<Self> {
+        match code {
+            consts::unit::MILLIDEGREE => Some(Unit::Millidegree),
+            consts::unit::MICROMETRE => Some(Unit::Micrometre),
+            _ => None,
+        }
+    }
+}
+
+/// One joint of the skeleton (SPEC.md §3.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Joint<'a> {
+    /// Joint name.
+    pub name: &'a str,
+    /// Parent joint index; `None` for a root.
+    pub parent: Option<u32>,
+    /// Offset from the parent in micrometres.
+    pub offset_um: [i32; 3],
+    /// True for a BVH End Site.
+    pub end_site: bool,
+    /// Kind codes of the joint's channels, in order (validated).
+    kinds: &'a [u8],
+}
+
+impl<'a> Joint<'a> {
+    /// Number of channels of the joint.
+    pub fn channel_count(&self) -> usize {
+        self.kinds.len()
+    }
+
+    /// The joint's channel kinds in order.
+    pub fn channel_kinds(&self) -> impl Iterator<Item = ChannelKind> + 'a {
+        self.kinds.iter().filter_map(|&c| ChannelKind::from_code(c))
+    }
+}
+
+/// One entry of the channel table (SPEC.md §3.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Channel<'a> {
+    /// Index of the joint the channel belongs to.
+    pub joint: u32,
+    /// Name of that joint.
+    pub joint_name: &'a str,
+    /// What the channel moves.
+    pub kind: ChannelKind,
+    /// Unit of its decoded integers.
+    pub unit: Unit,
+    /// Smallest decoded value over the clip.
+    pub min: i32,
+    /// Largest decoded value over the clip.
+    pub max: i32,
+}
+
+/// The parsed header: borrowed bytes plus the fields every player needs.
+#[derive(Clone, Copy, Debug)]
+pub struct Header<'a> {
+    bytes: &'a [u8],
+    frame_time_ns: u32,
+    frame_count: u32,
+    source_unit_nm: u32,
+    joint_count: u32,
+    joints_at: usize,
+    channel_count: u32,
+    channels_at: usize,
+}
+
+impl<'a> Header<'a> {
+    /// Parses and validates a header section (SPEC.md §3).
+    pub(crate) fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(bytes);
+        let malformed = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
+        let frame_time_ns = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        let frame_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        let source_unit_nm = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        if frame_time_ns == 0 || frame_count == 0 {
+            return Err(Error::HeaderTiming);
+        }
+        if source_unit_nm == 0 {
+            return Err(malformed(&r));
+        }
+        let joint_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        let joints_at = r.pos();
+        let mut declared: u32 = 0;
+        for index in 0..joint_count {
+            let joint = read_joint(&mut r)?;
+            if let Some(p) = joint.parent {
+                if p >= index {
+                    return Err(Error::HeaderParent { joint: index });
+                }
+            }
+            if joint.end_site && !joint.kinds.is_empty() {
+                return Err(malformed(&r));
+            }
+            for &code in joint.kinds {
+                ChannelKind::from_code(code).ok_or(Error::HeaderChannelKind { code })?;
+            }
+            let n = u32::try_from(joint.kinds.len()).map_err(|_| malformed(&r))?;
+            declared = declared.checked_add(n).ok_or_else(|| malformed(&r))?;
+        }
+        let channel_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        if channel_count != declared {
+            return Err(Error::HeaderChannelCount {
+                joints: declared,
+                table: channel_count,
+            });
+        }
+        let channels_at = r.pos();
+        for channel in 0..channel_count {
+            let (unit, min, max) = read_channel(&mut r)?;
+            Unit::from_code(unit).ok_or(Error::HeaderUnit { code: unit })?;
+            if min > max {
+                return Err(Error::HeaderRange { channel });
+            }
+        }
+        if !r.is_empty() {
+            return Err(Error::HeaderTrailingBytes);
+        }
+        Ok(Header {
+            bytes,
+            frame_time_ns,
+            frame_count,
+            source_unit_nm,
+            joint_count,
+            joints_at,
+            channel_count,
+            channels_at,
+        })
+    }
+
+    /// Nanoseconds per frame.
+    pub fn frame_time_ns(&self) -> u32 {
+        self.frame_time_ns
+    }
+
+    /// Number of frames (at least 1).
+    pub fn frame_count(&self) -> u32 {
+        self.frame_count
+    }
+
+    /// Length of one length unit of the source file in nanometres (used
+    /// to write BVH back in the source's units).
+    pub fn source_unit_nm(&self) -> u32 {
+        self.source_unit_nm
+    }
+
+    /// Clip duration in microseconds: `frame_count × frame_time`.
+    pub fn duration_us(&self) -> u64 {
+        u64::from(self.frame_count) * u64::from(self.frame_time_ns) / 1000
+    }
+
+    /// Number of joints, End Sites included.
+    pub fn joint_count(&self) -> usize {
+        self.joint_count as usize
+    }
+
+    /// Number of channels per frame.
+    pub fn channel_count(&self) -> usize {
+        self.channel_count as usize
+    }
+
+    /// The joints in file order.
+    pub fn joints(&self) -> JointIter<'a> {
+        JointIter {
+            reader: Reader::new(self.bytes.get(self.joints_at..).unwrap_or(&[])),
+            left: self.joint_count,
+        }
+    }
+
+    /// The channel table, in frame order.
+    pub fn channels(&self) -> ChannelIter<'a> {
+        ChannelIter {
+            joints: self.joints(),
+            joint_index: 0,
+            current: None,
+            kind_pos: 0,
+            table: Reader::new(self.bytes.get(self.channels_at..).unwrap_or(&[])),
+            left: self.channel_count,
+        }
+    }
+}
+
+fn read_joint<'a>(r: &mut Reader<'a>) -> Result<Joint<'a>, Error> {
+    let at = r.pos();
+    let name_bytes = r.byte_seq().ok_or(Error::HeaderMalformed { offset: at })?;
+    let name = core::str::from_utf8(name_bytes).map_err(|_| Error::HeaderUtf8 { offset: at })?;
+    let bad = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
+    let parent = match r.u8().ok_or_else(|| bad(r))? {
+        0 => None,
+        1 => Some(r.varint_u32().ok_or_else(|| bad(r))?),
+        _ => return Err(bad(r)),
+    };
+    let mut offset_um = [0i32; 3];
+    for v in offset_um.iter_mut() {
+        *v = r.zigzag_i32().ok_or_else(|| bad(r))?;
+    }
+    let end_site = r.bool().ok_or_else(|| bad(r))?;
+    let kinds = r.byte_seq().ok_or_else(|| bad(r))?;
+    Ok(Joint {
+        name,
+        parent,
+        offset_um,
+        end_site,
+        kinds,
+    })
+}
+
+fn read_channel(r: &mut Reader<'_>) -> Result<(u8, i32, i32), Error> {
+    let bad = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
+    let unit = r.u8().ok_or_else(|| bad(r))?;
+    let min = r.zigzag_i32().ok_or_else(|| bad(r))?;
+    let max = r.zigzag_i32().ok_or_else(|| bad(r))?;
+    Ok((unit, min, max))
+}
+
+/// Iterator over the joints of a validated header.
+#[derive(Clone, Debug)]
+pub struct JointIter<'a> {
+    reader: Reader<'a>,
+    left: u32,
+}
+
+impl<'a> Iterator for JointIter<'a> {
+    type Item = Joint<'a>;
+
+    fn next(&mut self) -> Option<Joint<'a>> {
+        if self.left == 0 {
+            return None;
+        }
+        self.left -= 1;
+        read_joint(&mut self.reader).ok()
+    }
+}
+
+/// Iterator over the channel table of a validated header.
+#[derive(Clone, Debug)]
+pub struct ChannelIter<'a> {
+    joints: JointIter<'a>,
+    joint_index: u32,
+    current: Option<Joint<'a>>,
+    kind_pos: usize,
+    table: Reader<'a>,
+    left: u32,
+}
+
+impl<'a> Iterator for ChannelIter<'a> {
+    type Item = Channel<'a>;
+
+    fn next(&mut self) -> Option<Channel<'a>> {
+        if self.left == 0 {
+            return None;
+        }
+        // Advance to the next joint that still has channels to hand out.
+        loop {
+            match self.current {
+                Some(j) if self.kind_pos < j.kinds.len() => break,
+                Some(_) => {
+                    self.current = self.joints.next();
+                    self.joint_index += 1;
+                    self.kind_pos = 0;
+                }
+                None => {
+                    self.current = self.joints.next();
+                    self.kind_pos = 0;
+                    self.current?;
+                }
+            }
+        }
+        let joint = self.current?;
+        let code = *joint.kinds.get(self.kind_pos)?;
+        self.kind_pos += 1;
+        let (unit, min, max) = read_channel(&mut self.table).ok()?;
+        self.left -= 1;
+        Some(Channel {
+            joint: self.joint_index,
+            joint_name: joint.name,
+            kind: ChannelKind::from_code(code)?,
+            unit: Unit::from_code(unit)?,
+            min,
+            max,
+        })
+    }
+}

@@ -1,0 +1,42 @@
+//! `no_std`, allocation-free decoder for `.mcb` motion clips (SPEC.md).
+//!
+//! ```text
+//! let clip = Clip::parse(bytes)?;            // zero copy, validates everything
+//! let mut player = Player::<96>::new(&clip)?; // fixed-size state, no allocation
+//! player.next_frame(&mut out)?;              // sequential
+//! player.frame(120, &mut out)?;              // random access
+//! player.sample_at(20_000, &mut out)?;       // any time t (µs), interpolated
+//! ```
+//!
+//! Every value is an `i32` in the fixed-point unit of its channel
+//! ([`Unit`]): identical bits on every platform.
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::indexing_slicing,
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic
+    )
+)]
+
+#[cfg(feature = "std")]
+extern crate std;
+
+mod bits;
+mod clip;
+#[cfg(feature = "codec-index")]
+mod codec;
+pub mod consts;
+mod error;
+mod header;
+mod player;
+mod reader;
+
+pub use clip::{Clip, Section, Sections};
+pub use error::Error;
+pub use header::{Channel, ChannelIter, ChannelKind, Header, Joint, JointIter, Unit};
+pub use player::Player;

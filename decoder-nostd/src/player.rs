@@ -1,0 +1,189 @@
+//! The player: sequential frames, random access and sampling at any time,
+//! over a fixed-size state owned by the caller's stack or a `static`.
+
+use crate::clip::Clip;
+#[cfg(feature = "codec-index")]
+use crate::codec::IndexCodec;
+use crate::consts;
+use crate::error::Error;
+
+/// The codec of a clip, validated.
+#[derive(Clone, Copy, Debug)]
+enum Codec<'a> {
+    #[cfg(feature = "codec-index")]
+    Index(IndexCodec<'a>),
+    #[allow(dead_code)]
+    None(core::marker::PhantomData<&'a ()>),
+}
+
+fn open_codec<'a>(clip: &Clip<'a>) -> Result<Codec<'a>, Error> {
+    let header = clip.header();
+    match clip.codec_id() {
+        #[cfg(feature = "codec-index")]
+        consts::SECTION_CODEC_INDEX => Ok(Codec::Index(IndexCodec::parse(
+            clip.codec_bytes(),
+            header.channel_count(),
+            header.frame_count(),
+        )?)),
+        _ => Err(Error::ContainerNoCodec),
+    }
+}
+
+/// Validates the codec section of a clip (called by [`Clip::parse`]).
+pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
+    open_codec(clip).map(|_| ())
+}
+
+/// Plays a clip of at most `N` channels.
+///
+/// State: the codec view (a few slices) and one frame of `N` values, so
+/// `size_of::<Player<N>>()` is about `4·N + 64` bytes on a 32-bit MCU.
+/// Output goes into the caller's slice, in the units of the channel table.
+#[derive(Clone, Debug)]
+pub struct Player<'a, const N: usize> {
+    codec: Codec<'a>,
+    channels: usize,
+    frames: u32,
+    frame_time_ns: u32,
+    /// The frame held in `state`, if any.
+    state_frame: Option<u32>,
+    /// Next frame [`Player::next_frame`] returns.
+    cursor: u32,
+    state: [i32; N],
+}
+
+impl<'a, const N: usize> Player<'a, N> {
+    /// A player positioned before the first frame.
+    pub fn new(clip: &Clip<'a>) -> Result<Self, Error> {
+        let header = clip.header();
+        let channels = header.channel_count();
+        if channels > N {
+            return Err(Error::PlayerCapacity {
+                channels,
+                capacity: N,
+            });
+        }
+        Ok(Player {
+            codec: open_codec(clip)?,
+            channels,
+            frames: header.frame_count(),
+            frame_time_ns: header.frame_time_ns(),
+            state_frame: None,
+            cursor: 0,
+            state: [0; N],
+        })
+    }
+
+    /// Channels per frame.
+    pub fn channel_count(&self) -> usize {
+        self.channels
+    }
+
+    /// Frames in the clip.
+    pub fn frame_count(&self) -> u32 {
+        self.frames
+    }
+
+    /// Moves the sequential cursor back to frame 0.
+    pub fn rewind(&mut self) {
+        self.cursor = 0;
+    }
+
+    /// Decodes the next frame into `out`; `Ok(None)` after the last frame.
+    pub fn next_frame(&mut self, out: &mut [i32]) -> Result<Option<u32>, Error> {
+        if self.cursor >= self.frames {
+            return Ok(None);
+        }
+        let i = self.cursor;
+        self.frame(i, out)?;
+        self.cursor = i + 1;
+        Ok(Some(i))
+    }
+
+    /// Decodes frame `i` into `out` (random access).
+    pub fn frame(&mut self, i: u32, out: &mut [i32]) -> Result<(), Error> {
+        let out = self.output(out)?;
+        if i >= self.frames {
+            return Err(Error::PlayerFrameOutOfRange {
+                frame: i,
+                frames: self.frames,
+            });
+        }
+        self.seek(i);
+        out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
+        Ok(())
+    }
+
+    /// Samples the clip at `t_us` microseconds from its start (SPEC.md
+    /// §5): linear interpolation between the two neighbouring frames in
+    /// fixed point; times past the last frame hold the last frame.
+    pub fn sample_at(&mut self, t_us: u64, out: &mut [i32]) -> Result<(), Error> {
+        let out = self.output(out)?;
+        let ns = t_us.saturating_mul(1000);
+        let period = u64::from(self.frame_time_ns);
+        let whole = ns / period;
+        let frac = ((ns % period) << 16) / period;
+        let last = self.frames - 1;
+        if whole >= u64::from(last) {
+            self.seek(last);
+            out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
+            return Ok(());
+        }
+        let i = whole as u32;
+        self.seek(i);
+        let now = self.state.get(..self.channels).unwrap_or(&[]);
+        out.copy_from_slice(now);
+        // Decode frame i + 1 into `out` without disturbing the state.
+        decode(&self.codec, i + 1, out);
+        for (o, &a) in out.iter_mut().zip(now) {
+            let d = i64::from(o.wrapping_sub(a));
+            *o = a.wrapping_add(((d * frac as i64) >> 16) as i32);
+        }
+        Ok(())
+    }
+
+    fn output<'o>(&self, out: &'o mut [i32]) -> Result<&'o mut [i32], Error> {
+        let actual = out.len();
+        out.get_mut(..self.channels)
+            .ok_or(Error::PlayerOutputTooSmall {
+                expected: self.channels,
+                actual,
+            })
+    }
+
+    /// Brings `state` to frame `i`, decoding as few frames as possible.
+    fn seek(&mut self, i: u32) {
+        if self.state_frame == Some(i) {
+            return;
+        }
+        let key = self.key_before(i);
+        let start = match self.state_frame {
+            Some(s) if s < i && s >= key => s + 1,
+            _ => key,
+        };
+        let codec = self.codec;
+        let state = self.state.get_mut(..self.channels).unwrap_or(&mut []);
+        for f in start..=i {
+            decode(&codec, f, state);
+        }
+        self.state_frame = Some(i);
+    }
+
+    fn key_before(&self, i: u32) -> u32 {
+        match &self.codec {
+            #[cfg(feature = "codec-index")]
+            Codec::Index(c) => c.key_before(i),
+            Codec::None(_) => i,
+        }
+    }
+}
+
+/// Decodes frame `f` into `values`, which hold frame `f - 1` if `f` is not
+/// a key frame.
+fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
+    match codec {
+        #[cfg(feature = "codec-index")]
+        Codec::Index(c) => c.decode_frame(f, values),
+        Codec::None(_) => {}
+    }
+}

@@ -1,0 +1,124 @@
+//! A cursor over a byte slice that never reads out of bounds: every read
+//! returns `None` past the end, and callers turn that into a typed error.
+//! Varints and zigzag integers follow postcard's wire format (SPEC.md §3.1).
+
+#[derive(Clone, Debug)]
+pub(crate) struct Reader<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Reader<'a> {
+    pub(crate) const fn new(bytes: &'a [u8]) -> Self {
+        Reader { bytes, pos: 0 }
+    }
+
+    pub(crate) fn pos(&self) -> usize {
+        self.pos
+    }
+
+    pub(crate) fn is_empty(&self) -> bool {
+        self.pos >= self.bytes.len()
+    }
+
+    pub(crate) fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+        let end = self.pos.checked_add(n)?;
+        let s = self.bytes.get(self.pos..end)?;
+        self.pos = end;
+        Some(s)
+    }
+
+    /// Everything not read yet; the cursor moves to the end.
+    pub(crate) fn rest(&mut self) -> &'a [u8] {
+        let s = self.bytes.get(self.pos..).unwrap_or(&[]);
+        self.pos = self.bytes.len();
+        s
+    }
+
+    pub(crate) fn u8(&mut self) -> Option<u8> {
+        let b = *self.bytes.get(self.pos)?;
+        self.pos += 1;
+        Some(b)
+    }
+
+    pub(crate) fn u16_le(&mut self) -> Option<u16> {
+        match self.take(2)? {
+            [a, b] => Some(u16::from_le_bytes([*a, *b])),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn u32_le(&mut self) -> Option<u32> {
+        match self.take(4)? {
+            [a, b, c, d] => Some(u32::from_le_bytes([*a, *b, *c, *d])),
+            _ => None,
+        }
+    }
+
+    /// LEB128 varint of at most 5 bytes whose value fits in `u32`
+    /// (postcard's `varint(u32)`); over-long or overflowing encodings fail.
+    pub(crate) fn varint_u32(&mut self) -> Option<u32> {
+        let mut value: u32 = 0;
+        for i in 0..5u32 {
+            let b = self.u8()?;
+            let chunk = u32::from(b & 0x7F);
+            if i == 4 && chunk > 0x0F {
+                return None;
+            }
+            value |= chunk << (7 * i);
+            if b & 0x80 == 0 {
+                return Some(value);
+            }
+        }
+        None
+    }
+
+    /// Zigzag-encoded `i32` (postcard's encoding of signed integers).
+    pub(crate) fn zigzag_i32(&mut self) -> Option<i32> {
+        let u = self.varint_u32()?;
+        Some(((u >> 1) as i32) ^ -((u & 1) as i32))
+    }
+
+    /// A varint length followed by that many bytes (postcard's `&[u8]`).
+    pub(crate) fn byte_seq(&mut self) -> Option<&'a [u8]> {
+        let len = self.varint_u32()?;
+        self.take(usize::try_from(len).ok()?)
+    }
+
+    /// A postcard `bool`: exactly 0 or 1.
+    pub(crate) fn bool(&mut self) -> Option<bool> {
+        match self.u8()? {
+            0 => Some(false),
+            1 => Some(true),
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn varints_follow_postcard() {
+        let mut r = Reader::new(&[0x00, 0x7F, 0x80, 0x01, 0xFF, 0xFF, 0xFF, 0xFF, 0x0F]);
+        assert_eq!(r.varint_u32(), Some(0));
+        assert_eq!(r.varint_u32(), Some(127));
+        assert_eq!(r.varint_u32(), Some(128));
+        assert_eq!(r.varint_u32(), Some(u32::MAX));
+        assert!(r.is_empty());
+        // Overflowing fifth byte and unterminated varints are rejected.
+        assert_eq!(Reader::new(&[0xFF, 0xFF, 0xFF, 0xFF, 0x1F]).varint_u32(), None);
+        assert_eq!(Reader::new(&[0x80, 0x80]).varint_u32(), None);
+    }
+
+    #[test]
+    fn zigzag() {
+        let mut r = Reader::new(&[0x00, 0x01, 0x02, 0x03, 0xFE, 0xFF, 0xFF, 0xFF, 0x0F]);
+        assert_eq!(r.zigzag_i32(), Some(0));
+        assert_eq!(r.zigzag_i32(), Some(-1));
+        assert_eq!(r.zigzag_i32(), Some(1));
+        assert_eq!(r.zigzag_i32(), Some(-2));
+        assert_eq!(r.zigzag_i32(), Some(i32::MAX));
+    }
+}

@@ -1,0 +1,81 @@
+//! Reading `.mcb` clips back on the host with the `no_std` decoder: the
+//! skeleton from the header, every frame through `Player`.
+
+use mocap_decoder::{Clip, Player};
+
+use crate::fixed;
+use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
+
+/// Largest channel count the host tools decode.
+pub const HOST_MAX_CHANNELS: usize = 4096;
+
+/// Decodes every frame of a clip: `frames × channels`, frame-major.
+pub fn decode_all(clip: &Clip<'_>) -> Result<Vec<i32>, mocap_decoder::Error> {
+    let mut player = Box::new(Player::<HOST_MAX_CHANNELS>::new(clip)?);
+    let n = player.channel_count();
+    let mut out = vec![0i32; n * player.frame_count() as usize];
+    for frame in out.chunks_mut(n.max(1)) {
+        if player.next_frame(frame)?.is_none() {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// The skeleton stored in a clip's header, lengths in the source's units.
+pub fn skeleton(clip: &Clip<'_>) -> Skeleton {
+    let h = clip.header();
+    let unit = f64::from(h.source_unit_nm()) * 1e-3; // µm per source unit
+    Skeleton {
+        joints: h
+            .joints()
+            .map(|j| Joint {
+                name: j.name.to_string(),
+                parent: j.parent.map(|p| p as usize),
+                offset: j.offset_um.map(|o| f64::from(o) / unit),
+                channels: j
+                    .channel_kinds()
+                    .map(|k| match k {
+                        mocap_decoder::ChannelKind::Xposition => ChannelKind::Xposition,
+                        mocap_decoder::ChannelKind::Yposition => ChannelKind::Yposition,
+                        mocap_decoder::ChannelKind::Zposition => ChannelKind::Zposition,
+                        mocap_decoder::ChannelKind::Xrotation => ChannelKind::Xrotation,
+                        mocap_decoder::ChannelKind::Yrotation => ChannelKind::Yrotation,
+                        mocap_decoder::ChannelKind::Zrotation => ChannelKind::Zrotation,
+                    })
+                    .collect(),
+                end_site: j.end_site,
+            })
+            .collect(),
+    }
+}
+
+/// Decodes a clip into a motion in the source's units, angles wrapped.
+pub fn to_motion(clip: &Clip<'_>) -> Result<Motion, mocap_decoder::Error> {
+    let h = clip.header();
+    let frames = decode_all(clip)?;
+    let metres_per_unit = f64::from(h.source_unit_nm()) * 1e-9;
+    Ok(fixed::from_fixed(
+        &skeleton(clip),
+        f64::from(h.frame_time_ns()) * 1e-9,
+        &frames,
+        metres_per_unit,
+    ))
+}
+
+/// The text the firmware example prints for a clip (firmware-example/
+/// README.md): one line per frame, values in decimal separated by single
+/// spaces. Lines starting with `#` are not part of it.
+pub fn uart_text(frames: &[i32], channels: usize) -> String {
+    let mut s = String::with_capacity(frames.len() * 8);
+    for frame in frames.chunks(channels.max(1)) {
+        for (i, v) in frame.iter().enumerate() {
+            if i > 0 {
+                s.push(' ');
+            }
+            s.push_str(&v.to_string());
+        }
+        s.push('\n');
+    }
+    s
+}

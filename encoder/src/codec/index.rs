@@ -1,0 +1,341 @@
+//! Encoder of the `index` codec (SPEC.md §4): per channel, a codebook of
+//! 2^b values sized from the channel's tolerance (b = 0 for constant
+//! channels), and — where it is smaller — a delta codebook with absolute key
+//! frames every K frames. The encoder simulates the decoder exactly (closed
+//! loop), so delta errors never accumulate past the tolerance.
+
+use mocap_decoder::consts::index::{DESCRIPTOR_LEN, FLAG_ACCUMULATE, MAX_BITS};
+
+use super::quantizer::{self, Codebook};
+
+/// Key-frame intervals the encoder tries when none is forced
+/// (0 = absolute codes only).
+pub const KEY_INTERVALS: [u16; 6] = [0, 8, 16, 32, 64, 128];
+
+/// How one channel is coded.
+#[derive(Clone, Debug)]
+pub struct ChannelCode {
+    /// Codebook used in key frames (and in every frame for absolute
+    /// channels).
+    pub key: Codebook,
+    /// Delta codebook for delta frames; `None` for absolute channels.
+    pub delta: Option<Codebook>,
+    /// Index per frame.
+    pub indices: Vec<u16>,
+    /// The values the decoder will produce.
+    pub decoded: Vec<i32>,
+}
+
+/// A channel coded for one key interval, with its cost.
+struct Candidate {
+    code: ChannelCode,
+    bits: u64,
+}
+
+fn is_key(frame: usize, k: usize) -> bool {
+    k == 0 || frame % k == 0
+}
+
+/// Absolute coding of every frame.
+fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
+    let cb = quantizer::fit(x, tol, MAX_BITS)?;
+    let indices: Vec<u16> = x.iter().map(|&v| cb.nearest(v) as u16).collect();
+    let decoded = indices.iter().map(|&i| cb.value(usize::from(i)) as i32).collect();
+    let bits = x.len() as u64 * u64::from(cb.bits) + table_bits(&cb);
+    Some(Candidate {
+        code: ChannelCode {
+            key: cb,
+            delta: None,
+            indices,
+            decoded,
+        },
+        bits,
+    })
+}
+
+fn table_bits(cb: &Codebook) -> u64 {
+    16 * cb.entries.len() as u64 + 8 * DESCRIPTOR_LEN as u64
+}
+
+/// Delta coding with key frames every `k`; tries delta codebooks of
+/// growing size and keeps the first whose closed loop meets `tol`.
+fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8) -> Option<Candidate> {
+    let keys: Vec<i64> = x.iter().enumerate().filter(|(f, _)| is_key(*f, k)).map(|(_, &v)| v).collect();
+    let key_cb = quantizer::fit(&keys, tol, MAX_BITS)?;
+    let steps: Vec<i64> = (1..x.len()).filter(|&f| !is_key(f, k)).map(|f| x[f] - x[f - 1]).collect();
+    if steps.is_empty() {
+        return None;
+    }
+    // Delta codebooks with a tolerance below `tol` leave the closed loop room
+    // to absorb the error carried from the previous frame.
+    for frac in [2i64, 3, 4, 6, 8] {
+        let step_tol = tol / frac;
+        let Some(cb) = quantizer::fit(&steps, step_tol, max_bits) else {
+            continue;
+        };
+        if let Some(c) = closed_loop(x, tol, k, &key_cb, &cb) {
+            return Some(c);
+        }
+    }
+    None
+}
+
+fn closed_loop(x: &[i64], tol: i64, k: usize, key_cb: &Codebook, cb: &Codebook) -> Option<Candidate> {
+    let mut indices = Vec::with_capacity(x.len());
+    let mut decoded = Vec::with_capacity(x.len());
+    let mut prev: i32 = 0;
+    for (f, &v) in x.iter().enumerate() {
+        let (i, out) = if is_key(f, k) {
+            let i = key_cb.nearest(v);
+            (i, key_cb.value(i) as i32)
+        } else {
+            let i = cb.nearest(v - i64::from(prev));
+            (i, prev.wrapping_add(cb.value(i) as i32))
+        };
+        if (i64::from(out) - v).abs() > tol {
+            return None;
+        }
+        indices.push(i as u16);
+        decoded.push(out);
+        prev = out;
+    }
+    let nk = (0..x.len()).filter(|&f| is_key(f, k)).count() as u64;
+    let nd = x.len() as u64 - nk;
+    let bits = nk * u64::from(key_cb.bits) + nd * u64::from(cb.bits) + table_bits(key_cb) + table_bits(cb);
+    Some(Candidate {
+        code: ChannelCode {
+            key: key_cb.clone(),
+            delta: Some(cb.clone()),
+            indices,
+            decoded,
+        },
+        bits,
+    })
+}
+
+/// Codes one channel for key interval `k`: the cheaper of absolute and
+/// delta coding. `None` if the tolerance cannot be met with 12-bit codes.
+fn code_channel(x: &[i64], tol: i64, k: usize) -> Option<Candidate> {
+    let abs = absolute(x, tol)?;
+    if k == 0 || abs.code.key.bits <= 1 {
+        return Some(abs);
+    }
+    match delta(x, tol, k, abs.code.key.bits.saturating_sub(1)) {
+        Some(d) if d.bits < abs.bits => Some(d),
+        _ => Some(abs),
+    }
+}
+
+/// A whole clip coded by the index codec.
+#[derive(Clone, Debug)]
+pub struct IndexEncoding {
+    /// Key-frame interval K (0 = absolute only).
+    pub key_interval: u16,
+    /// Per channel.
+    pub channels: Vec<ChannelCode>,
+}
+
+/// Why a clip could not be coded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ToleranceTooTight {
+    /// Channel index.
+    pub channel: usize,
+}
+
+/// Codes every channel (`x[channel][frame]`) within `tol[channel]` (same
+/// units), trying each key interval of `intervals` and keeping the
+/// smallest section.
+pub fn encode(x: &[Vec<i32>], tol: &[i64], intervals: &[u16]) -> Result<IndexEncoding, ToleranceTooTight> {
+    let wide: Vec<Vec<i64>> = x.iter().map(|c| c.iter().map(|&v| i64::from(v)).collect()).collect();
+    let mut best: Option<(u64, IndexEncoding)> = None;
+    for &k in intervals {
+        let mut total = 0u64;
+        let mut channels = Vec::with_capacity(x.len());
+        for (c, series) in wide.iter().enumerate() {
+            let cand = code_channel(series, tol[c].max(0), usize::from(k)).ok_or(ToleranceTooTight { channel: c })?;
+            total += cand.bits;
+            channels.push(cand.code);
+        }
+        if best.as_ref().is_none_or(|(b, _)| total < *b) {
+            best = Some((total, IndexEncoding { key_interval: k, channels }));
+        }
+    }
+    Ok(best.map(|(_, e)| e).unwrap_or(IndexEncoding {
+        key_interval: 0,
+        channels: Vec::new(),
+    }))
+}
+
+/// Lays codebooks into one pool, letting a table's unused tail overlap the
+/// next table (SPEC.md §4.2 allows overlap); returns each codebook's offset.
+struct Pool {
+    entries: Vec<i16>,
+}
+
+impl Pool {
+    fn place(&mut self, cb: &Codebook) -> u16 {
+        let off = self.entries.len();
+        self.entries.extend_from_slice(&cb.entries);
+        off as u16
+    }
+
+    /// Pads so that every table's full `2^bits` range lies inside the pool.
+    fn pad_for(&mut self, off: u16, bits: u8) {
+        let end = usize::from(off) + (1usize << bits);
+        if self.entries.len() < end {
+            self.entries.resize(end, 0);
+        }
+    }
+}
+
+fn descriptor(cb: &Codebook, off: u16, accumulate: bool) -> [u8; DESCRIPTOR_LEN] {
+    let [o0, o1] = off.to_le_bytes();
+    let [b0, b1, b2, b3] = cb.base.to_le_bytes();
+    let flags = if accumulate { FLAG_ACCUMULATE } else { 0 };
+    [cb.bits, cb.shift | flags, o0, o1, b0, b1, b2, b3]
+}
+
+/// Little-endian, LSB-first bit writer (SPEC.md §4.4).
+#[derive(Default)]
+pub struct BitWriter {
+    bytes: Vec<u8>,
+    bit: u64,
+}
+
+impl BitWriter {
+    /// Appends the low `n` bits of `v`.
+    pub fn write(&mut self, v: u32, n: u8) {
+        for i in 0..n {
+            if self.bit % 8 == 0 {
+                self.bytes.push(0);
+            }
+            if (v >> i) & 1 != 0 {
+                *self.bytes.last_mut().expect("pushed above") |= 1 << (self.bit % 8);
+            }
+            self.bit += 1;
+        }
+    }
+
+    /// The bytes written, the last one zero-padded.
+    pub fn finish(self) -> Vec<u8> {
+        self.bytes
+    }
+}
+
+impl IndexEncoding {
+    /// The codec section bytes (SPEC.md §4.1). Fails if the table pool
+    /// exceeds the 16-bit offsets of the format.
+    pub fn to_section(&self) -> Result<Vec<u8>, String> {
+        let mut pool = Pool { entries: Vec::new() };
+        let mut key_desc = Vec::new();
+        let mut delta_desc = Vec::new();
+        let mut placed = Vec::new();
+        for ch in &self.channels {
+            let key_off = pool.place(&ch.key);
+            let delta_off = ch.delta.as_ref().map(|d| pool.place(d));
+            placed.push((key_off, delta_off));
+        }
+        for (ch, &(key_off, delta_off)) in self.channels.iter().zip(&placed) {
+            pool.pad_for(key_off, ch.key.bits);
+            key_desc.extend_from_slice(&descriptor(&ch.key, key_off, false));
+            if self.key_interval > 0 {
+                match (&ch.delta, delta_off) {
+                    (Some(d), Some(off)) => {
+                        pool.pad_for(off, d.bits);
+                        delta_desc.extend_from_slice(&descriptor(d, off, true));
+                    }
+                    _ => delta_desc.extend_from_slice(&descriptor(&ch.key, key_off, false)),
+                }
+            }
+        }
+        if pool.entries.len() > usize::from(u16::MAX) {
+            return Err(format!(
+                "index codec: {} table entries exceed the format's 65535 (loosen the error bound)",
+                pool.entries.len()
+            ));
+        }
+        let frames = self.channels.first().map_or(0, |c| c.indices.len());
+        let mut bits = BitWriter::default();
+        for f in 0..frames {
+            let key = self.key_interval == 0 || f % usize::from(self.key_interval) == 0;
+            for ch in &self.channels {
+                let width = match (&ch.delta, key) {
+                    (Some(d), false) => d.bits,
+                    _ => ch.key.bits,
+                };
+                bits.write(u32::from(ch.indices[f]), width);
+            }
+        }
+        let mut out = Vec::new();
+        out.extend_from_slice(&self.key_interval.to_le_bytes());
+        out.extend_from_slice(&(self.channels.len() as u16).to_le_bytes());
+        out.extend_from_slice(&(pool.entries.len() as u32).to_le_bytes());
+        out.extend_from_slice(&key_desc);
+        out.extend_from_slice(&delta_desc);
+        for e in &pool.entries {
+            out.extend_from_slice(&e.to_le_bytes());
+        }
+        out.extend_from_slice(&bits.finish());
+        Ok(out)
+    }
+
+    /// Decoded values per channel, as the decoder will produce them.
+    pub fn decoded(&self) -> Vec<Vec<i32>> {
+        self.channels.iter().map(|c| c.decoded.clone()).collect()
+    }
+}
+
+/// One channel's parameters as stored in a section (for `mocap info`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DescriptorInfo {
+    /// Bits per key-frame index.
+    pub key_bits: u8,
+    /// Bits per delta-frame index (equal to `key_bits` for absolute channels).
+    pub delta_bits: u8,
+    /// True if delta frames accumulate.
+    pub accumulate: bool,
+}
+
+/// What `mocap info` shows of an index section.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SectionInfo {
+    /// Key-frame interval.
+    pub key_interval: u16,
+    /// Entries in the table pool.
+    pub table_entries: u32,
+    /// Per channel.
+    pub channels: Vec<DescriptorInfo>,
+    /// Payload bytes.
+    pub payload_bytes: usize,
+}
+
+/// Reads the descriptors of an index section that the decoder validated.
+pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
+    let key_interval = u16::from_le_bytes(section.get(0..2)?.try_into().ok()?);
+    let n = usize::from(u16::from_le_bytes(section.get(2..4)?.try_into().ok()?));
+    let table_entries = u32::from_le_bytes(section.get(4..8)?.try_into().ok()?);
+    let key = section.get(8..8 + n * DESCRIPTOR_LEN)?;
+    let delta_at = 8 + n * DESCRIPTOR_LEN;
+    let delta = if key_interval > 0 {
+        section.get(delta_at..delta_at + n * DESCRIPTOR_LEN)?
+    } else {
+        key
+    };
+    let desc_end = if key_interval > 0 { delta_at + n * DESCRIPTOR_LEN } else { delta_at };
+    let payload_at = desc_end + 2 * table_entries as usize;
+    let channels = key
+        .chunks_exact(DESCRIPTOR_LEN)
+        .zip(delta.chunks_exact(DESCRIPTOR_LEN))
+        .map(|(k, d)| DescriptorInfo {
+            key_bits: k[0],
+            delta_bits: d[0],
+            accumulate: d[1] & FLAG_ACCUMULATE != 0,
+        })
+        .collect();
+    Some(SectionInfo {
+        key_interval,
+        table_entries,
+        channels,
+        payload_bytes: section.len().saturating_sub(payload_at),
+    })
+}

@@ -1,0 +1,122 @@
+//! Writes the `.mcb` container (SPEC.md §2) and its header section (§3).
+//! The header is postcard-encoded from the structs below; the decoder reads
+//! the same bytes with its own zero-copy reader.
+
+use mocap_decoder::consts::{self, CRC_LEN, PREAMBLE_LEN, SECTION_ENTRY_LEN};
+use serde::Serialize;
+
+use crate::fixed::FixedChannels;
+use crate::motion::Motion;
+
+/// CRC-32/ISO-HDLC, the same as the decoder's (SPEC.md §2.3).
+pub const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// Header section, field for field in SPEC.md §3.1 order.
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct HeaderWire {
+    /// Nanoseconds per frame.
+    pub frame_time_ns: u32,
+    /// Number of frames.
+    pub frame_count: u32,
+    /// One source length unit in nanometres.
+    pub source_unit_nm: u32,
+    /// Joints in file order.
+    pub joints: Vec<JointWire>,
+    /// Channel table.
+    pub channels: Vec<ChannelWire>,
+}
+
+/// One joint (SPEC.md §3.2).
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct JointWire {
+    /// Joint name.
+    pub name: String,
+    /// Parent index, `None` for a root.
+    pub parent: Option<u32>,
+    /// Offset in micrometres.
+    pub offset_um: [i32; 3],
+    /// BVH End Site.
+    pub end_site: bool,
+    /// Channel kind codes.
+    pub kinds: Vec<u8>,
+}
+
+/// One channel-table entry (SPEC.md §3.3).
+#[derive(Serialize, Debug, Clone, PartialEq)]
+pub struct ChannelWire {
+    /// Unit code.
+    pub unit: u8,
+    /// Smallest decoded value.
+    pub min: i32,
+    /// Largest decoded value.
+    pub max: i32,
+}
+
+impl HeaderWire {
+    /// The header of `m`, with channel ranges taken from the decoded values
+    /// (`decoded[channel][frame]`).
+    pub fn new(m: &Motion, metres_per_unit: f64, decoded: &FixedChannels) -> HeaderWire {
+        let um = metres_per_unit * 1e6;
+        HeaderWire {
+            frame_time_ns: (m.frame_time * 1e9).round().clamp(1.0, u32::MAX as f64) as u32,
+            frame_count: m.frames() as u32,
+            source_unit_nm: (metres_per_unit * 1e9).round().clamp(1.0, u32::MAX as f64) as u32,
+            joints: m
+                .skeleton
+                .joints
+                .iter()
+                .map(|j| JointWire {
+                    name: j.name.clone(),
+                    parent: j.parent.map(|p| p as u32),
+                    offset_um: j.offset.map(|o| (o * um).round() as i32),
+                    end_site: j.end_site,
+                    kinds: j.channels.iter().map(|k| k.code()).collect(),
+                })
+                .collect(),
+            channels: decoded
+                .kinds
+                .iter()
+                .zip(&decoded.values)
+                .map(|(k, v)| ChannelWire {
+                    unit: if k.is_rotation() {
+                        consts::unit::MILLIDEGREE
+                    } else {
+                        consts::unit::MICROMETRE
+                    },
+                    min: v.iter().copied().min().unwrap_or(0),
+                    max: v.iter().copied().max().unwrap_or(0),
+                })
+                .collect(),
+        }
+    }
+
+    /// The postcard bytes of the header section.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        postcard::to_stdvec(self).expect("postcard serialisation of plain data cannot fail")
+    }
+}
+
+/// Assembles sections into a container: preamble, section table, payloads
+/// in table order, CRC-32.
+pub fn assemble(sections: &[(u8, Vec<u8>)]) -> Vec<u8> {
+    let mut out = Vec::new();
+    out.extend_from_slice(&consts::MAGIC);
+    out.push(consts::VERSION);
+    out.push(0); // flags
+    out.extend_from_slice(&(sections.len() as u16).to_le_bytes());
+    let mut offset = PREAMBLE_LEN + sections.len() * SECTION_ENTRY_LEN;
+    for (id, bytes) in sections {
+        out.push(*id);
+        out.extend_from_slice(&[0, 0, 0]);
+        out.extend_from_slice(&(offset as u32).to_le_bytes());
+        out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+        offset += bytes.len();
+    }
+    for (_, bytes) in sections {
+        out.extend_from_slice(bytes);
+    }
+    let crc = CRC32.checksum(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    debug_assert_eq!(out.len(), offset + CRC_LEN);
+    out
+}

@@ -1,0 +1,374 @@
+//! `mocap`: the command-line front end of the encoder.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use mocap_decoder::Clip;
+use mocap_encoder::codec::index;
+use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+use mocap_encoder::units::LengthUnit;
+use mocap_encoder::{bench, bvh, clipfile, fixed, generate, metrics, units};
+
+#[derive(Parser)]
+#[command(name = "mocap", version, about = "Motion-capture codec for microcontrollers")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Target {
+    /// A microcontroller: integer decoder, tables in flash.
+    Mcu,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Emit {
+    /// A Rust source file with a `pub static CLIP: [u8; N]`.
+    Rust,
+    /// A C header with `static const uint8_t clip[]`.
+    C,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Encode a BVH file into a .mcb clip, proving the error bound.
+    Encode {
+        /// Input BVH file.
+        input: PathBuf,
+        /// Output .mcb file.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Target of the bitstream.
+        #[arg(long, value_enum, default_value = "mcu")]
+        target: Target,
+        /// Codec.
+        #[arg(long, value_enum, default_value = "index")]
+        codec: CodecChoice,
+        /// Error bound, repeatable: `1deg` (rotation channels) and/or `8mm`
+        /// (joint positions by forward kinematics).
+        #[arg(long = "max-error", default_value = "1deg")]
+        max_error: Vec<BoundSpec>,
+        /// Length unit of the input (auto: from the skeleton's height).
+        #[arg(long, default_value = "auto")]
+        units: UnitArg,
+        /// Force the key-frame interval of the index codec (0 = none).
+        #[arg(long)]
+        key_interval: Option<u16>,
+        /// Also write the clip as a source file beside the output.
+        #[arg(long, value_enum)]
+        emit: Option<Emit>,
+    },
+    /// Decode a .mcb clip into BVH (or the firmware's text format).
+    Decode {
+        /// Input .mcb clip.
+        input: PathBuf,
+        /// Output file (BVH unless --text).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Write the firmware's UART text format instead of BVH.
+        #[arg(long)]
+        text: bool,
+    },
+    /// Show a clip's sections, channels and codec parameters.
+    Info {
+        /// Input .mcb clip.
+        input: PathBuf,
+        /// List every channel.
+        #[arg(long)]
+        channels: bool,
+    },
+    /// Decode a clip with the no_std decoder and measure it against its source.
+    Eval {
+        /// The source BVH.
+        input: PathBuf,
+        /// The clip.
+        clip: PathBuf,
+        /// One JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Length unit of the input.
+        #[arg(long, default_value = "auto")]
+        units: UnitArg,
+    },
+    /// Rate–distortion table over files or folders of BVH.
+    Bench {
+        /// BVH files or folders.
+        paths: Vec<PathBuf>,
+        /// Error bounds, repeatable.
+        #[arg(long = "max-error", default_values = ["1deg", "0.25deg"])]
+        max_error: Vec<String>,
+        /// Write the rows as JSON here too.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// Write the procedural demo clip the project ships.
+    Generate {
+        /// Output BVH file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+}
+
+#[derive(Clone, Debug)]
+enum UnitArg {
+    Auto,
+    Fixed(LengthUnit),
+}
+
+impl std::str::FromStr for UnitArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "auto" {
+            Ok(UnitArg::Auto)
+        } else {
+            s.parse::<LengthUnit>().map(UnitArg::Fixed).map_err(|e| e.to_string())
+        }
+    }
+}
+
+fn resolve_units(arg: &UnitArg, m: &mocap_encoder::motion::Motion) -> LengthUnit {
+    match arg {
+        UnitArg::Auto => units::detect(m),
+        UnitArg::Fixed(u) => *u,
+    }
+}
+
+fn read_clip(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn parse_clip<'a>(path: &Path, bytes: &'a [u8]) -> Result<Clip<'a>, String> {
+    Clip::parse(bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn emit_source(kind: Emit, output: &Path, bytes: &[u8]) -> Result<PathBuf, String> {
+    let body: Vec<String> = bytes
+        .chunks(16)
+        .map(|c| c.iter().map(|b| format!("0x{b:02x},")).collect::<Vec<_>>().join(" "))
+        .collect();
+    let (ext, text) = match kind {
+        Emit::Rust => (
+            "rs",
+            format!(
+                "// Generated by `mocap encode`; a .mcb clip (SPEC.md).\npub static CLIP: [u8; {}] = [\n    {}\n];\n",
+                bytes.len(),
+                body.join("\n    ")
+            ),
+        ),
+        Emit::C => (
+            "h",
+            format!(
+                "/* Generated by `mocap encode`; a .mcb clip (SPEC.md). */\n#include <stdint.h>\nstatic const uint8_t clip[{}] = {{\n    {}\n}};\n",
+                bytes.len(),
+                body.join("\n    ")
+            ),
+        ),
+    };
+    let path = output.with_extension(ext);
+    write(&path, text.as_bytes())?;
+    Ok(path)
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Encode {
+            input,
+            output,
+            target: Target::Mcu,
+            codec,
+            max_error,
+            units: unit_arg,
+            key_interval,
+            emit,
+        } => {
+            let m = bvh::read_file(&input).map_err(|e| e.to_string())?;
+            let unit = resolve_units(&unit_arg, &m);
+            let bound = Bound::from_specs(&max_error);
+            eprintln!(
+                "{}: {} frames × {} channels at {:.1} Hz, units {unit}; encoding ({codec:?}, bound {bound})…",
+                input.display(),
+                m.frames(),
+                m.channels(),
+                1.0 / m.frame_time
+            );
+            let opts = EncodeOptions {
+                codec,
+                bound,
+                metres_per_unit: unit.metres(),
+                key_interval,
+            };
+            let enc = encode::encode(&m, &opts)?;
+            write(&output, &enc.bytes)?;
+            let file_bytes = std::fs::metadata(&input).map(|m| m.len()).unwrap_or(0);
+            let x = &enc.metrics;
+            println!(
+                "{}: {} bytes, ratio {:.2}:1 vs f32 ({:.1}:1 vs file), angle max {:.3}°, rms {:.3}°, joint max {:.2} mm, ARMS {:.2} mm, d {:.2}% (bound {bound} holds; key interval {})",
+                output.display(),
+                enc.bytes.len(),
+                x.ratio_f32,
+                file_bytes as f64 / enc.bytes.len() as f64,
+                x.angle_max_deg,
+                x.angle_rms_deg,
+                x.max_joint_err_mm,
+                x.arms_mm,
+                x.distortion_pct,
+                enc.key_interval
+            );
+            if let Some(kind) = emit {
+                let p = emit_source(kind, &output, &enc.bytes)?;
+                eprintln!("wrote {}", p.display());
+            }
+            Ok(())
+        }
+        Command::Decode { input, output, text } => {
+            let bytes = read_clip(&input)?;
+            let clip = parse_clip(&input, &bytes)?;
+            if text {
+                let frames = clipfile::decode_all(&clip).map_err(|e| e.to_string())?;
+                let s = clipfile::uart_text(&frames, clip.header().channel_count());
+                write(&output, s.as_bytes())?;
+            } else {
+                let m = clipfile::to_motion(&clip).map_err(|e| e.to_string())?;
+                bvh::write_file(&m, &output).map_err(|e| format!("{}: {e}", output.display()))?;
+            }
+            eprintln!("wrote {}", output.display());
+            Ok(())
+        }
+        Command::Info { input, channels } => {
+            let bytes = read_clip(&input)?;
+            let clip = parse_clip(&input, &bytes)?;
+            print!("{}", info_text(&clip, channels));
+            Ok(())
+        }
+        Command::Eval {
+            input,
+            clip: clip_path,
+            json,
+            units: unit_arg,
+        } => {
+            let m = bvh::read_file(&input).map_err(|e| e.to_string())?;
+            let unit = resolve_units(&unit_arg, &m);
+            let bytes = read_clip(&clip_path)?;
+            let clip = parse_clip(&clip_path, &bytes)?;
+            let h = clip.header();
+            if h.channel_count() != m.channels() || h.frame_count() as usize != m.frames() {
+                return Err(format!(
+                    "{} has {} frames × {} channels but {} has {} × {}",
+                    clip_path.display(),
+                    h.frame_count(),
+                    h.channel_count(),
+                    input.display(),
+                    m.frames(),
+                    m.channels()
+                ));
+            }
+            let frames = clipfile::decode_all(&clip).map_err(|e| e.to_string())?;
+            let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
+            let file_bytes = std::fs::metadata(&input).map(|x| x.len() as usize).unwrap_or(0);
+            let x = metrics::compare(&m, &back, unit.metres(), None, bytes.len(), file_bytes);
+            if json {
+                println!("{}", serde_json::to_string(&x).map_err(|e| e.to_string())?);
+            } else {
+                println!("bytes            {}", x.bytes);
+                println!("ratio vs f32     {:.2}:1", x.ratio_f32);
+                println!("ratio vs file    {:.2}:1", x.ratio_file);
+                println!("ARMS             {:.3} mm", x.arms_mm);
+                println!(
+                    "max joint error  {:.3} mm ({} at frame {})",
+                    x.max_joint_err_mm, x.max_joint_err_joint, x.max_joint_err_frame
+                );
+                println!("distortion d     {:.3} %", x.distortion_pct);
+                println!("angle RMS / max  {:.4}° / {:.4}°", x.angle_rms_deg, x.angle_max_deg);
+                println!("frames×channels  {}×{}", x.frames, x.channels);
+            }
+            Ok(())
+        }
+        Command::Bench { paths, max_error, json } => {
+            let specs = max_error
+                .iter()
+                .map(|s| s.parse::<BoundSpec>())
+                .collect::<Result<Vec<_>, _>>()?;
+            let rows = bench::run(&paths, &specs, &max_error)?;
+            print!("{}", bench::markdown(&rows));
+            if let Some(p) = json {
+                write(&p, serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?.as_bytes())?;
+            }
+            Ok(())
+        }
+        Command::Generate { output } => {
+            bvh::write_file(&generate::animatronic_demo(), &output)
+                .map_err(|e| format!("{}: {e}", output.display()))?;
+            eprintln!("wrote {}", output.display());
+            Ok(())
+        }
+    }
+}
+
+fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
+    let h = clip.header();
+    let mut s = String::new();
+    s += &format!(
+        "clip: {} bytes, version {}, {} frames × {} channels, {:.3} Hz ({} ns/frame), {:.3} s, {} joints, source unit {} nm\n",
+        clip.bytes().len(),
+        mocap_decoder::consts::VERSION,
+        h.frame_count(),
+        h.channel_count(),
+        1e9 / f64::from(h.frame_time_ns()),
+        h.frame_time_ns(),
+        h.duration_us() as f64 * 1e-6,
+        h.joint_count(),
+        h.source_unit_nm()
+    );
+    for sec in clip.sections() {
+        s += &format!("section {:#04x}: {} bytes\n", sec.id, sec.bytes.len());
+        if sec.id == mocap_decoder::consts::SECTION_CODEC_INDEX {
+            if let Some(info) = index::inspect(sec.bytes) {
+                let n = info.channels.len().max(1);
+                let key: u32 = info.channels.iter().map(|c| u32::from(c.key_bits)).sum();
+                let delta: u32 = info.channels.iter().map(|c| u32::from(c.delta_bits)).sum();
+                let constant = info.channels.iter().filter(|c| c.key_bits == 0 && c.delta_bits == 0).count();
+                let deltas = info.channels.iter().filter(|c| c.accumulate).count();
+                s += &format!(
+                    "  index codec: key interval {}, table {} entries, payload {} bytes\n  bits per frame: key {key} ({:.2}/channel), delta {delta} ({:.2}/channel)\n  channels: {constant} constant, {deltas} delta-coded, {} absolute\n",
+                    info.key_interval,
+                    info.table_entries,
+                    info.payload_bytes,
+                    key as f64 / n as f64,
+                    delta as f64 / n as f64,
+                    n - constant - deltas
+                );
+                if list_channels {
+                    for (c, (ch, d)) in h.channels().zip(&info.channels).enumerate() {
+                        s += &format!(
+                            "  {c:4} {}.{:<10} key {:2} bits, delta {:2} bits{} range [{}, {}]\n",
+                            ch.joint_name,
+                            ch.kind.name(),
+                            d.key_bits,
+                            d.delta_bits,
+                            if d.accumulate { " (acc)" } else { "" },
+                            ch.min,
+                            ch.max
+                        );
+                    }
+                }
+            }
+        }
+    }
+    s
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("mocap: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

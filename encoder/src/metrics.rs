@@ -1,0 +1,147 @@
+//! Error and size metrics (METHODS.md "Metrics"): ARMS, max joint error,
+//! distortion rate d, angle RMS/max, compression ratios. Positions come
+//! from forward kinematics of the input skeleton, in millimetres.
+
+use serde::Serialize;
+
+use crate::fixed::wrap_degrees;
+use crate::kinematics;
+use crate::motion::Motion;
+
+/// Everything `mocap eval --json` prints.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Metrics {
+    /// Clip size in bytes.
+    pub bytes: usize,
+    /// frames × channels × 4 / bytes.
+    pub ratio_f32: f64,
+    /// Input file bytes / clip bytes (0 when the input size is unknown).
+    pub ratio_file: f64,
+    /// Mean over frames of the RMS joint-position error, mm.
+    pub arms_mm: f64,
+    /// Largest joint-position error over all frames and joints, mm.
+    pub max_joint_err_mm: f64,
+    /// Where it occurs: joint name.
+    pub max_joint_err_joint: String,
+    /// Where it occurs: frame index.
+    pub max_joint_err_frame: usize,
+    /// Distortion rate d = 100·‖A − Ã‖/‖A − E(A)‖ over joint positions, %.
+    pub distortion_pct: f64,
+    /// RMS of wrap-aware rotation-channel errors, degrees.
+    pub angle_rms_deg: f64,
+    /// Largest wrap-aware rotation-channel error, degrees.
+    pub angle_max_deg: f64,
+    /// Largest translation-channel error, mm.
+    pub position_max_mm: f64,
+    /// Frames.
+    pub frames: usize,
+    /// Channels per frame.
+    pub channels: usize,
+}
+
+/// Positions of every joint for every frame, in millimetres.
+pub fn positions_mm(m: &Motion, metres_per_unit: f64) -> Vec<[f64; 3]> {
+    let mm = metres_per_unit * 1000.0;
+    let mut all = Vec::new();
+    let mut one = Vec::new();
+    for f in 0..m.frames() {
+        kinematics::joint_positions(&m.skeleton, m.frame(f), &mut one);
+        all.extend(one.iter().map(|p| p.map(|v| v * mm)));
+    }
+    all
+}
+
+/// Compares `decoded` with `original` (same skeleton and frame count).
+/// `original_positions` may be passed in to skip recomputing them.
+pub fn compare(
+    original: &Motion,
+    decoded: &Motion,
+    metres_per_unit: f64,
+    original_positions: Option<&[[f64; 3]]>,
+    bytes: usize,
+    input_bytes: usize,
+) -> Metrics {
+    let frames = original.frames().min(decoded.frames());
+    let channels = original.channels();
+    let own;
+    let a = match original_positions {
+        Some(p) => p,
+        None => {
+            own = positions_mm(original, metres_per_unit);
+            &own
+        }
+    };
+    let b = positions_mm(decoded, metres_per_unit);
+    let joints = original.skeleton.joints.len().max(1);
+
+    let mut arms_sum = 0.0;
+    let mut max_err = 0.0f64;
+    let mut max_at = (0usize, 0usize);
+    let mut err_sq = 0.0;
+    for f in 0..frames {
+        let mut frame_sq = 0.0;
+        for j in 0..joints {
+            let (p, q) = (a[f * joints + j], b[f * joints + j]);
+            let d2: f64 = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum();
+            frame_sq += d2;
+            if d2.sqrt() > max_err {
+                max_err = d2.sqrt();
+                max_at = (f, j);
+            }
+        }
+        err_sq += frame_sq;
+        arms_sum += (frame_sq / joints as f64).sqrt();
+    }
+    // ‖A − E(A)‖ with E(A) the per-coordinate mean over frames.
+    let mut spread = 0.0;
+    for j in 0..joints {
+        for k in 0..3 {
+            let mean = (0..frames).map(|f| a[f * joints + j][k]).sum::<f64>() / frames.max(1) as f64;
+            spread += (0..frames).map(|f| (a[f * joints + j][k] - mean).powi(2)).sum::<f64>();
+        }
+    }
+
+    let kinds: Vec<_> = original.skeleton.channel_list().into_iter().map(|(_, k)| k).collect();
+    let (mut ang_sq, mut ang_n, mut ang_max, mut pos_max) = (0.0, 0usize, 0.0f64, 0.0f64);
+    for f in 0..frames {
+        let (x, y) = (original.frame(f), decoded.frame(f));
+        for (c, kind) in kinds.iter().enumerate() {
+            if kind.is_rotation() {
+                let d = wrap_degrees(y[c] - x[c]).abs();
+                ang_sq += d * d;
+                ang_n += 1;
+                ang_max = ang_max.max(d);
+            } else {
+                pos_max = pos_max.max((y[c] - x[c]).abs() * metres_per_unit * 1000.0);
+            }
+        }
+    }
+    let raw = frames * channels * 4;
+    Metrics {
+        bytes,
+        ratio_f32: raw as f64 / bytes.max(1) as f64,
+        ratio_file: if input_bytes > 0 {
+            input_bytes as f64 / bytes.max(1) as f64
+        } else {
+            0.0
+        },
+        arms_mm: arms_sum / frames.max(1) as f64,
+        max_joint_err_mm: max_err,
+        max_joint_err_joint: original.skeleton.joints[max_at.1].name.clone(),
+        max_joint_err_frame: max_at.0,
+        distortion_pct: if spread > 0.0 {
+            100.0 * (err_sq / spread).sqrt()
+        } else {
+            0.0
+        },
+        angle_rms_deg: if ang_n > 0 {
+            (ang_sq / ang_n as f64).sqrt()
+        } else {
+            0.0
+        },
+        angle_max_deg: ang_max,
+        position_max_mm: pos_max,
+        frames,
+        channels,
+    }
+}

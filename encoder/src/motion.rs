@@ -1,0 +1,183 @@
+//! The in-memory motion model every part of the encoder works on: a joint
+//! hierarchy (skeleton) plus a frames × channels matrix of values in the
+//! file's own units (lengths) and degrees (angles).
+
+use std::fmt;
+
+/// One BVH channel type. Rotations are in degrees, positions in the
+/// skeleton's length unit (see [`crate::units::LengthUnit`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ChannelKind {
+    /// Translation along X.
+    Xposition,
+    /// Translation along Y.
+    Yposition,
+    /// Translation along Z.
+    Zposition,
+    /// Rotation about X, degrees.
+    Xrotation,
+    /// Rotation about Y, degrees.
+    Yrotation,
+    /// Rotation about Z, degrees.
+    Zrotation,
+}
+
+impl ChannelKind {
+    /// All kinds, in the order of their bitstream codes (SPEC.md §3.2).
+    pub const ALL: [ChannelKind; 6] = [
+        ChannelKind::Xposition,
+        ChannelKind::Yposition,
+        ChannelKind::Zposition,
+        ChannelKind::Xrotation,
+        ChannelKind::Yrotation,
+        ChannelKind::Zrotation,
+    ];
+
+    /// The name as written in a BVH `CHANNELS` line.
+    pub fn bvh_name(self) -> &'static str {
+        match self {
+            ChannelKind::Xposition => "Xposition",
+            ChannelKind::Yposition => "Yposition",
+            ChannelKind::Zposition => "Zposition",
+            ChannelKind::Xrotation => "Xrotation",
+            ChannelKind::Yrotation => "Yrotation",
+            ChannelKind::Zrotation => "Zrotation",
+        }
+    }
+
+    /// Parses a BVH channel name (case-insensitive, as exporters vary).
+    pub fn from_bvh_name(s: &str) -> Option<ChannelKind> {
+        ChannelKind::ALL
+            .into_iter()
+            .find(|k| k.bvh_name().eq_ignore_ascii_case(s))
+    }
+
+    /// True for the three rotation kinds.
+    pub fn is_rotation(self) -> bool {
+        matches!(
+            self,
+            ChannelKind::Xrotation | ChannelKind::Yrotation | ChannelKind::Zrotation
+        )
+    }
+
+    /// Axis index 0 = X, 1 = Y, 2 = Z.
+    pub fn axis(self) -> usize {
+        match self {
+            ChannelKind::Xposition | ChannelKind::Xrotation => 0,
+            ChannelKind::Yposition | ChannelKind::Yrotation => 1,
+            ChannelKind::Zposition | ChannelKind::Zrotation => 2,
+        }
+    }
+
+    /// The bitstream code of this kind (SPEC.md §3.2).
+    pub fn code(self) -> u8 {
+        match self {
+            ChannelKind::Xposition => 0,
+            ChannelKind::Yposition => 1,
+            ChannelKind::Zposition => 2,
+            ChannelKind::Xrotation => 3,
+            ChannelKind::Yrotation => 4,
+            ChannelKind::Zrotation => 5,
+        }
+    }
+
+    /// Inverse of [`ChannelKind::code`].
+    pub fn from_code(code: u8) -> Option<ChannelKind> {
+        ChannelKind::ALL.get(usize::from(code)).copied()
+    }
+}
+
+impl fmt::Display for ChannelKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.bvh_name())
+    }
+}
+
+/// A joint of the hierarchy. End Sites are joints with `end_site == true`
+/// and no channels; they matter for forward kinematics (they are the tips
+/// whose positions the error metrics measure) and for writing BVH back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    /// Joint name (End Sites are named `<parent>_End`).
+    pub name: String,
+    /// Index of the parent joint; `None` for a root.
+    pub parent: Option<usize>,
+    /// OFFSET from the parent, in the skeleton's length unit.
+    pub offset: [f64; 3],
+    /// Channels in the order the CHANNELS line lists them.
+    pub channels: Vec<ChannelKind>,
+    /// True for an End Site.
+    pub end_site: bool,
+}
+
+/// Joint hierarchy in depth-first file order: a parent always comes before
+/// its children.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Skeleton {
+    /// Joints in file order.
+    pub joints: Vec<Joint>,
+}
+
+impl Skeleton {
+    /// Total number of channels over all joints.
+    pub fn channel_count(&self) -> usize {
+        self.joints.iter().map(|j| j.channels.len()).sum()
+    }
+
+    /// For each channel (in frame-row order): (joint index, kind).
+    pub fn channel_list(&self) -> Vec<(usize, ChannelKind)> {
+        self.joints
+            .iter()
+            .enumerate()
+            .flat_map(|(j, joint)| joint.channels.iter().map(move |&k| (j, k)))
+            .collect()
+    }
+
+    /// `Joint.Kind` names of every channel, e.g. `LeftForeArm.Zrotation`.
+    pub fn channel_names(&self) -> Vec<String> {
+        self.channel_list()
+            .into_iter()
+            .map(|(j, k)| format!("{}.{}", self.joints[j].name, k))
+            .collect()
+    }
+}
+
+/// A motion clip: skeleton, frame time and the frames × channels matrix.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// The joint hierarchy.
+    pub skeleton: Skeleton,
+    /// Seconds per frame (BVH `Frame Time`).
+    pub frame_time: f64,
+    /// Row-major values: `values[frame * channels + channel]`.
+    pub values: Vec<f64>,
+}
+
+impl Motion {
+    /// Number of channels per frame.
+    pub fn channels(&self) -> usize {
+        self.skeleton.channel_count()
+    }
+
+    /// Number of frames.
+    pub fn frames(&self) -> usize {
+        let c = self.channels();
+        if c == 0 {
+            0
+        } else {
+            self.values.len() / c
+        }
+    }
+
+    /// One frame's values.
+    pub fn frame(&self, i: usize) -> &[f64] {
+        let c = self.channels();
+        &self.values[i * c..(i + 1) * c]
+    }
+
+    /// One channel's values over all frames.
+    pub fn channel(&self, c: usize) -> Vec<f64> {
+        let n = self.channels();
+        (0..self.frames()).map(|f| self.values[f * n + c]).collect()
+    }
+}

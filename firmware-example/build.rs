@@ -1,0 +1,112 @@
+//! Puts the board's memory map on the linker search path (as `memory.x`, which cortex-m-rt's
+//! `link.x` INCLUDEs) and copies the clip to embed into OUT_DIR (`clip.mcb`, read by
+//! `include_bytes!` in src/main.rs).
+//!
+//! The clip is `$MOCAP_CLIP` when set (relative paths are relative to this directory), else
+//! `clips/demo.mcb`.
+
+use std::env;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::exit;
+
+/// (cargo feature, memory map relative to this directory, Rust targets that suit the core)
+const BOARDS: &[(&str, &str, &[&str])] = &[
+    (
+        "board-lm3s6965",
+        "../memory.x",
+        &["thumbv7m-none-eabi", "thumbv6m-none-eabi"],
+    ),
+    ("board-microbit", "memory/microbit.x", &["thumbv6m-none-eabi"]),
+    (
+        "board-mps2-an386",
+        "memory/mps2-an386.x",
+        &[
+            "thumbv7em-none-eabihf",
+            "thumbv7em-none-eabi",
+            "thumbv7m-none-eabi",
+            "thumbv6m-none-eabi",
+        ],
+    ),
+];
+
+const DEFAULT_CLIP: &str = "clips/demo.mcb";
+
+fn fail(msg: &str) -> ! {
+    // `cargo:warning` is shown even when the build script's output is not; the exit fails the build.
+    for line in msg.lines() {
+        println!("cargo:warning={line}");
+    }
+    eprintln!("error: {msg}");
+    exit(1);
+}
+
+fn feature_env(feature: &str) -> String {
+    format!(
+        "CARGO_FEATURE_{}",
+        feature.to_uppercase().replace('-', "_")
+    )
+}
+
+fn main() {
+    let manifest_dir = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let target = env::var("TARGET").unwrap_or_default();
+
+    // ---- board and memory map
+    let selected: Vec<_> = BOARDS
+        .iter()
+        .filter(|(feature, _, _)| env::var_os(feature_env(feature)).is_some())
+        .collect();
+    let (feature, memory, targets) = match selected.as_slice() {
+        [one] => **one,
+        [] => fail(
+            "mocap-firmware: no board selected. Enable exactly one of the features \
+             board-lm3s6965 (default), board-microbit, board-mps2-an386.",
+        ),
+        many => fail(&format!(
+            "mocap-firmware: several boards selected ({}). Use --no-default-features \
+             --features board-<name> to pick exactly one.",
+            many.iter().map(|b| b.0).collect::<Vec<_>>().join(", ")
+        )),
+    };
+    if !targets.contains(&target.as_str()) {
+        fail(&format!(
+            "mocap-firmware: feature {feature} needs one of the targets {targets:?}, \
+             but this build is for '{target}'. Pass --target {} (scripts/firmware.sh does this).",
+            targets[0]
+        ));
+    }
+    let memory_src = manifest_dir.join(memory);
+    copy_or_fail(&memory_src, &out_dir.join("memory.x"), "memory map");
+    println!("cargo:rustc-link-search={}", out_dir.display());
+    println!("cargo:rerun-if-changed={}", memory_src.display());
+
+    // ---- clip
+    println!("cargo:rerun-if-env-changed=MOCAP_CLIP");
+    let clip = match env::var_os("MOCAP_CLIP") {
+        Some(path) if !path.is_empty() => manifest_dir.join(path),
+        _ => manifest_dir.join(DEFAULT_CLIP),
+    };
+    // Watch the file even when it is missing, so creating it triggers a new build.
+    println!("cargo:rerun-if-changed={}", clip.display());
+    if !clip.is_file() {
+        fail(&format!(
+            "mocap-firmware: clip to embed not found: {}\n\
+             Set MOCAP_CLIP=/path/to/clip.mcb (made with `mocap encode --target mcu IN -o OUT.mcb`), \
+             or create {DEFAULT_CLIP}. scripts/firmware.sh takes --clip PATH.",
+            clip.display()
+        ));
+    }
+    copy_or_fail(&clip, &out_dir.join("clip.mcb"), "clip");
+}
+
+fn copy_or_fail(from: &Path, to: &Path, what: &str) {
+    let bytes = fs::read(from)
+        .unwrap_or_else(|e| fail(&format!("mocap-firmware: cannot read {what} {}: {e}", from.display())));
+    // Rewrite only on change: an unchanged copy keeps the firmware from recompiling.
+    if fs::read(to).ok().as_deref() != Some(bytes.as_slice()) {
+        fs::write(to, &bytes)
+            .unwrap_or_else(|e| fail(&format!("mocap-firmware: cannot write {}: {e}", to.display())));
+    }
+}

@@ -1,0 +1,167 @@
+//! The one thing the example needs from each board: a transmit-only UART at 115200 8N1.
+//!
+//! Raw register access on purpose: no PAC/HAL per board, so the three boards share one
+//! dependency set and the flash figures show the decoder, not a HAL. QEMU ignores the baud
+//! rate; the values are the real boards' so the same binary also talks on hardware.
+
+use core::ptr::{read_volatile, write_volatile};
+
+#[inline(always)]
+fn write_reg(addr: usize, value: u32) {
+    // SAFETY: callers pass addresses of this board's memory-mapped UART/clock registers.
+    unsafe { write_volatile(addr as *mut u32, value) }
+}
+
+#[inline(always)]
+fn read_reg(addr: usize) -> u32 {
+    // SAFETY: as for `write_reg`.
+    unsafe { read_volatile(addr as *const u32) }
+}
+
+/// Byte sink behind the text output.
+pub trait Write {
+    /// Blocks until the byte is handed to the UART.
+    fn write_byte(&mut self, byte: u8);
+}
+
+#[cfg(feature = "board-lm3s6965")]
+mod imp {
+    //! TI Stellaris LM3S6965 UART0 (an ARM PL011) on PA0/PA1.
+    use super::{read_reg, write_reg};
+
+    pub const NAME: &str = "lm3s6965";
+
+    const SYSCTL_RCGC1: usize = 0x400F_E104; // bit 0: UART0 clock
+    const SYSCTL_RCGC2: usize = 0x400F_E108; // bit 0: GPIO port A clock
+    const GPIOA_AFSEL: usize = 0x4000_4420;
+    const GPIOA_DEN: usize = 0x4000_451C;
+    const UART0: usize = 0x4000_C000;
+    const DR: usize = UART0; // data
+    const FR: usize = UART0 + 0x18; // flags
+    const IBRD: usize = UART0 + 0x24;
+    const FBRD: usize = UART0 + 0x28;
+    const LCRH: usize = UART0 + 0x2C;
+    const CR: usize = UART0 + 0x30;
+    const FR_TXFF: u32 = 1 << 5; // transmit FIFO full
+
+    pub struct Uart(());
+
+    impl Uart {
+        pub fn init() -> Self {
+            // Only UART0 (reset state has every other clock off; setting more wakes QEMU timers).
+            write_reg(SYSCTL_RCGC1, 1);
+            write_reg(SYSCTL_RCGC2, read_reg(SYSCTL_RCGC2) | 1);
+            write_reg(GPIOA_AFSEL, read_reg(GPIOA_AFSEL) | 0b11);
+            write_reg(GPIOA_DEN, read_reg(GPIOA_DEN) | 0b11);
+            write_reg(CR, 0); // disabled while configuring
+            // 12 MHz reset clock / (16 * 115200) = 6.51: integer 6, fraction 0.51 * 64 = 33.
+            write_reg(IBRD, 6);
+            write_reg(FBRD, 33);
+            write_reg(LCRH, 0b11 << 5 | 1 << 4); // 8 bits, FIFOs on
+            write_reg(CR, 1 << 9 | 1 << 8 | 1); // RXE, TXE, UARTEN
+            Uart(())
+        }
+
+        /// The UART as configured by an earlier `init` (panic and fault handlers).
+        pub fn steal() -> Self {
+            Uart(())
+        }
+    }
+
+    impl super::Write for Uart {
+        fn write_byte(&mut self, byte: u8) {
+            while read_reg(FR) & FR_TXFF != 0 {}
+            write_reg(DR, u32::from(byte));
+        }
+    }
+}
+
+#[cfg(feature = "board-microbit")]
+mod imp {
+    //! Nordic nRF51822 UART0, TX on P0.24 (the micro:bit's USB serial).
+    use super::{read_reg, write_reg};
+
+    pub const NAME: &str = "microbit";
+
+    const UART0: usize = 0x4000_2000;
+    const TASKS_STARTTX: usize = UART0 + 0x008;
+    const EVENTS_TXDRDY: usize = UART0 + 0x11C;
+    const ENABLE: usize = UART0 + 0x500;
+    const PSELTXD: usize = UART0 + 0x50C;
+    const PSELRXD: usize = UART0 + 0x514;
+    const TXD: usize = UART0 + 0x51C;
+    const BAUDRATE: usize = UART0 + 0x524;
+
+    pub struct Uart(());
+
+    impl Uart {
+        pub fn init() -> Self {
+            write_reg(PSELTXD, 24);
+            write_reg(PSELRXD, 25);
+            write_reg(BAUDRATE, 0x01D7_E000); // 115200
+            write_reg(ENABLE, 4);
+            write_reg(TASKS_STARTTX, 1);
+            Uart(())
+        }
+
+        /// The UART as configured by an earlier `init` (panic and fault handlers).
+        pub fn steal() -> Self {
+            Uart(())
+        }
+    }
+
+    impl super::Write for Uart {
+        fn write_byte(&mut self, byte: u8) {
+            write_reg(EVENTS_TXDRDY, 0);
+            write_reg(TXD, u32::from(byte));
+            while read_reg(EVENTS_TXDRDY) == 0 {}
+        }
+    }
+}
+
+#[cfg(feature = "board-mps2-an386")]
+mod imp {
+    //! Arm CMSDK APB UART0 of the MPS2 AN386 image.
+    use super::{read_reg, write_reg};
+
+    pub const NAME: &str = "mps2-an386";
+
+    const UART0: usize = 0x4000_4000;
+    const DATA: usize = UART0;
+    const STATE: usize = UART0 + 0x4;
+    const CTRL: usize = UART0 + 0x8;
+    const BAUDDIV: usize = UART0 + 0x10;
+    const STATE_TX_FULL: u32 = 1;
+    const CTRL_TX_EN: u32 = 1;
+
+    pub struct Uart(());
+
+    impl Uart {
+        pub fn init() -> Self {
+            write_reg(BAUDDIV, 25_000_000 / 115_200); // 25 MHz peripheral clock
+            write_reg(CTRL, CTRL_TX_EN);
+            Uart(())
+        }
+
+        /// The UART as configured by an earlier `init` (panic and fault handlers).
+        pub fn steal() -> Self {
+            Uart(())
+        }
+    }
+
+    impl super::Write for Uart {
+        fn write_byte(&mut self, byte: u8) {
+            while read_reg(STATE) & STATE_TX_FULL != 0 {}
+            write_reg(DATA, u32::from(byte));
+        }
+    }
+}
+
+#[cfg(not(any(
+    feature = "board-lm3s6965",
+    feature = "board-microbit",
+    feature = "board-mps2-an386"
+)))]
+compile_error!("enable one board feature: board-lm3s6965, board-microbit or board-mps2-an386");
+
+pub use imp::{Uart, NAME};

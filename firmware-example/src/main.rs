@@ -1,0 +1,366 @@
+//! mocap-firmware: plays the `.mcb` clip embedded in flash and prints every decoded frame on
+//! the board's UART, then decode statistics, then exits through semihosting (QEMU's exit code).
+//!
+//! Output format: see README.md. Lines starting with `#` are metadata; every other line is
+//! one frame and must be byte-identical to the host decoder's output for the same clip.
+#![no_std]
+#![no_main]
+
+mod board;
+mod text;
+
+use core::mem::size_of;
+
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
+use mocap_decoder::{Clip, Error, Player};
+
+use board::Uart;
+use text::Text;
+
+/// Channel capacity of the player: enough for a full BVH skeleton.
+const MAX_CHANNELS: usize = 320;
+
+/// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `clips/demo.mcb`).
+static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
+
+type Out = Text<Uart>;
+
+/// Calls into the decoder, kept out of line so that `scripts/firmware.sh size` can attribute
+/// code to the decoder by symbol name even after LTO has inlined the decoder's internals here.
+mod decoder_glue {
+    use super::{Clip, Error, Player, MAX_CHANNELS};
+
+    #[inline(never)]
+    pub fn parse(bytes: &'static [u8]) -> Result<Clip<'static>, Error> {
+        Clip::parse(bytes)
+    }
+
+    #[inline(never)]
+    pub fn new_player(clip: &Clip<'static>) -> Result<Player<'static, MAX_CHANNELS>, Error> {
+        Player::new(clip)
+    }
+
+    #[inline(never)]
+    pub fn next_frame(
+        player: &mut Player<'static, MAX_CHANNELS>,
+        out: &mut [i32; MAX_CHANNELS],
+    ) -> Result<Option<u32>, Error> {
+        player.next_frame(out)
+    }
+}
+
+/// SysTick as a free-running 24-bit down-counter clocked by the core.
+///
+/// Under `qemu -icount shift=0` every instruction advances virtual time by 1 ns, so ticks are
+/// exactly proportional to instructions (ticks per instruction = core clock / 1 GHz).
+/// [`calibrate`] measures that ratio with a loop of known length.
+mod ticks {
+    use super::{SystClkSource, SYST};
+
+    const MASK: u32 = 0x00FF_FFFF;
+
+    pub fn start(syst: &mut SYST) {
+        syst.disable_interrupt();
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(MASK);
+        syst.clear_current();
+        syst.enable_counter();
+    }
+
+    #[inline(always)]
+    pub fn now() -> u32 {
+        SYST::get_current()
+    }
+
+    /// Ticks from `earlier` to `later` (one wrap at most: callers keep spans under 2^24 ticks).
+    #[inline(always)]
+    pub fn since(earlier: u32, later: u32) -> u32 {
+        earlier.wrapping_sub(later) & MASK
+    }
+}
+
+/// Instructions executed by [`spin`] in the calibration (2 per iteration).
+const CALIBRATION_INSTRUCTIONS: u32 = 2 * CALIBRATION_ITERATIONS;
+const CALIBRATION_ITERATIONS: u32 = 1_000_000;
+
+/// Exactly two instructions per iteration: `subs`, `bne`.
+#[inline(never)]
+fn spin(iterations: u32) {
+    // SAFETY: register-only loop; touches no memory and no stack.
+    unsafe {
+        core::arch::asm!(
+            "2:",
+            "subs r0, #1",
+            "bne 2b",
+            inout("r0") iterations => _,
+            options(nomem, nostack),
+        );
+    }
+}
+
+/// Ticks that [`CALIBRATION_INSTRUCTIONS`] instructions take.
+fn calibrate() -> u32 {
+    let t0 = ticks::now();
+    spin(CALIBRATION_ITERATIONS);
+    ticks::since(t0, ticks::now())
+}
+
+/// Converts ticks into instructions with the calibration (0 if SysTick did not run).
+fn instructions(ticks: u64, calibration_ticks: u32) -> u64 {
+    if calibration_ticks == 0 {
+        return 0;
+    }
+    let cal = u64::from(calibration_ticks);
+    (ticks * u64::from(CALIBRATION_INSTRUCTIONS) + cal / 2) / cal
+}
+
+/// Stack high-water mark: paint the free RAM between the end of .bss and the stack pointer,
+/// later count how much of the paint was overwritten.
+mod stack {
+    use core::ptr::{addr_of, read_volatile, write_volatile};
+
+    const PAINT: u32 = 0xA5C3_5A3C;
+
+    extern "C" {
+        static __sheap: u32; // cortex-m-rt: first free word after .bss/.uninit
+        static _stack_start: u32; // cortex-m-rt: initial stack pointer (top of RAM)
+    }
+
+    #[allow(unused_unsafe)] // taking the address of an extern static became safe in Rust 1.82
+    fn bottom() -> usize {
+        // SAFETY: only the address of the linker symbol is taken.
+        unsafe { addr_of!(__sheap) as usize }
+    }
+
+    #[allow(unused_unsafe)]
+    fn top() -> usize {
+        // SAFETY: as above.
+        unsafe { addr_of!(_stack_start) as usize }
+    }
+
+    #[inline(never)]
+    pub fn paint() {
+        let sp: usize;
+        // SAFETY: reads the stack pointer.
+        unsafe { core::arch::asm!("mov {}, sp", out(reg) sp, options(nomem, nostack)) };
+        // Leave a margin below this function's frame.
+        let end = sp.saturating_sub(64) & !3;
+        let mut p = bottom();
+        while p < end {
+            // SAFETY: free RAM between the statics and the live stack, owned by nothing.
+            unsafe { write_volatile(p as *mut u32, PAINT) };
+            p += 4;
+        }
+    }
+
+    #[inline(never)]
+    pub fn used_bytes() -> usize {
+        let mut p = bottom();
+        // SAFETY: reads RAM between the statics and the stack top.
+        while p < top() && unsafe { read_volatile(p as *const u32) } == PAINT {
+            p += 4;
+        }
+        top() - p
+    }
+}
+
+/// Why the run failed.
+enum Failure {
+    Decoder(&'static str, Error),
+    FrameIndex { expected: u32, got: u32 },
+    FrameCount { header: u32, decoded: u32 },
+}
+
+/// Figures of the timed pass.
+struct Timing {
+    frames: u32,
+    total_ticks: u64,
+    max_frame_ticks: u32,
+}
+
+/// Pass 1: decode every frame, timing only the decoder (no output in the measured spans).
+/// Telescoping reads: each read ends one span and starts the next, so the sum is exact.
+#[inline(never)]
+fn timed_pass(clip: &Clip<'static>) -> Result<Timing, Failure> {
+    let mut player = decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?;
+    let mut out = [0i32; MAX_CHANNELS];
+    let mut timing = Timing { frames: 0, total_ticks: 0, max_frame_ticks: 0 };
+    let mut prev = ticks::now();
+    loop {
+        let result = decoder_glue::next_frame(&mut player, &mut out);
+        let now = ticks::now();
+        let spent = ticks::since(prev, now);
+        prev = now;
+        match result {
+            Ok(Some(index)) => {
+                if index != timing.frames {
+                    return Err(Failure::FrameIndex { expected: timing.frames, got: index });
+                }
+                timing.frames += 1;
+                timing.total_ticks += u64::from(spent);
+                timing.max_frame_ticks = timing.max_frame_ticks.max(spent);
+            }
+            Ok(None) => return Ok(timing),
+            Err(e) => return Err(Failure::Decoder("frame", e)),
+        }
+    }
+}
+
+/// Pass 2: decode again and print every frame.
+#[inline(never)]
+fn print_pass(clip: &Clip<'static>, text: &mut Out) -> Result<u32, Failure> {
+    let mut player = decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?;
+    let channels = player.channel_count();
+    let mut out = [0i32; MAX_CHANNELS];
+    let mut frames = 0u32;
+    loop {
+        match decoder_glue::next_frame(&mut player, &mut out) {
+            Ok(Some(index)) => {
+                if index != frames {
+                    return Err(Failure::FrameIndex { expected: frames, got: index });
+                }
+                frames += 1;
+                for (i, value) in out.iter().take(channels).enumerate() {
+                    if i > 0 {
+                        text.str(" ");
+                    }
+                    text.i32(*value);
+                }
+                text.nl();
+            }
+            Ok(None) => return Ok(frames),
+            Err(e) => return Err(Failure::Decoder("frame", e)),
+        }
+    }
+}
+
+fn run(text: &mut Out) -> Result<(), Failure> {
+    let calibration_ticks = calibrate();
+
+    let t0 = ticks::now();
+    let clip = decoder_glue::parse(CLIP).map_err(|e| Failure::Decoder("parse", e))?;
+    let parse_ticks = ticks::since(t0, ticks::now());
+
+    let header_frames = clip.header().frame_count();
+    let channels = clip.header().channel_count();
+    text.str("# mocap-firmware clip")
+        .kv("frames", u64::from(header_frames))
+        .kv("channels", channels as u64)
+        .nl();
+
+    let t0 = ticks::now();
+    let player = decoder_glue::new_player(&clip).map_err(|e| Failure::Decoder("player", e))?;
+    let new_ticks = ticks::since(t0, ticks::now());
+    drop(player);
+
+    let timing = timed_pass(&clip)?;
+    let printed = print_pass(&clip, text)?;
+    if timing.frames != header_frames || printed != header_frames {
+        return Err(Failure::FrameCount { header: header_frames, decoded: timing.frames.min(printed) });
+    }
+
+    // ---- statistics (all `# ` lines; excluded from host comparisons)
+    let cal = calibration_ticks;
+    let frames = u64::from(timing.frames.max(1));
+    let values = frames * (channels.max(1) as u64);
+    let decode = instructions(timing.total_ticks, cal);
+    let parse = instructions(u64::from(parse_ticks), cal);
+    let new = instructions(u64::from(new_ticks), cal);
+    let total = parse + new + decode;
+    text.str("# board=").str(board::NAME).kv("max_channels", MAX_CHANNELS as u64).nl();
+    text.str("#")
+        .kv("instructions_total", total)
+        .kv("frames", u64::from(timing.frames))
+        .kv("per_frame", total / frames)
+        .kv("per_channel_x100", total * 100 / values)
+        .nl();
+    text.str("#")
+        .kv("decode_instructions_total", decode)
+        .kv("frames", u64::from(timing.frames))
+        .kv("per_frame", decode / frames)
+        .kv("per_channel_x100", decode * 100 / values)
+        .kv("max_frame", instructions(u64::from(timing.max_frame_ticks), cal))
+        .nl();
+    text.str("#").kv("parse_instructions", parse).kv("player_new_instructions", new).nl();
+    text.str("#")
+        .kv("calibration_instructions", u64::from(CALIBRATION_INSTRUCTIONS))
+        .kv("calibration_ticks", u64::from(cal))
+        .kv("instructions_per_tick", instructions(1, cal))
+        .kv("decode_ticks", timing.total_ticks)
+        .nl();
+    text.str("#").kv("state_bytes", size_of::<Player<'static, MAX_CHANNELS>>() as u64).nl();
+    text.str("#").kv("flash_clip_bytes", CLIP.len() as u64).nl();
+    text.str("#").kv("stack_bytes_used", stack::used_bytes() as u64).nl();
+    Ok(())
+}
+
+fn report(text: &mut Out, failure: &Failure) {
+    match failure {
+        Failure::Decoder(phase, error) => {
+            text.str("# error ").str(phase).str(": ");
+            // core::fmt only on this path; the error's Display says which SPEC.md rule broke.
+            let _ = core::fmt::write(&mut FmtAdapter(text), format_args!("{error}"));
+            text.nl();
+        }
+        Failure::FrameIndex { expected, got } => {
+            text.str("# error frame_index").kv("expected", u64::from(*expected)).kv("got", u64::from(*got)).nl();
+        }
+        Failure::FrameCount { header, decoded } => {
+            text.str("# error frame_count").kv("header", u64::from(*header)).kv("decoded", u64::from(*decoded)).nl();
+        }
+    }
+}
+
+struct FmtAdapter<'t>(&'t mut Out);
+
+impl core::fmt::Write for FmtAdapter<'_> {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        self.0.str(s);
+        Ok(())
+    }
+}
+
+fn exit(success: bool) -> ! {
+    debug::exit(if success { EXIT_SUCCESS } else { EXIT_FAILURE });
+    // Reached only when no debugger/emulator handles the semihosting call.
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    stack::paint();
+    let mut text = Text(Uart::init());
+    let Some(mut core) = cortex_m::Peripherals::take() else {
+        text.str("# error peripherals already taken\n");
+        exit(false);
+    };
+    ticks::start(&mut core.SYST);
+
+    let ok = match run(&mut text) {
+        Ok(()) => true,
+        Err(failure) => {
+            report(&mut text, &failure);
+            false
+        }
+    };
+    text.str("# end\n");
+    exit(ok)
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    let mut text = Text(Uart::steal());
+    text.str("\n# error panic\n# end\n");
+    exit(false)
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    let mut text = Text(Uart::steal());
+    text.str("\n# error hardfault").kv("pc", u64::from(frame.pc())).str("\n# end\n");
+    exit(false)
+}

@@ -1,0 +1,233 @@
+#!/usr/bin/env bash
+# Front door for the Cortex-M firmware example (firmware-example/): build, run in QEMU, size.
+#
+#   scripts/firmware.sh build --board B [--clip PATH.mcb]
+#       Builds the firmware with the clip embedded. The last line on stdout is the ELF's path
+#       (a copy per board and clip content, so parallel callers never overwrite each other's ELF).
+#   scripts/firmware.sh run --board B [--clip PATH.mcb] [--icount] [--timeout SECONDS]
+#       Builds, then runs the ELF in QEMU headless: the UART on stdout, semihosting on. The exit
+#       code is the firmware's (0 = every frame decoded), 124 on timeout (default 300 s).
+#       --icount adds `-icount shift=0` so the instruction figures in the output are exact.
+#   scripts/firmware.sh size --board B [--clip PATH.mcb]
+#       Builds, then prints key=value lines: text, data, bss, flash_bytes (text+data),
+#       ram_static_bytes (data+bss), flash_clip_bytes, flash_without_clip_bytes,
+#       decoder_code_bytes (code of mocap_decoder::*, crc::* and the firmware's out-of-line calls
+#       into the decoder, where LTO inlines it), core_fmt_code_bytes (error messages only),
+#       firmware_own_code_bytes. Stack use is printed by `run` (# stack_bytes_used=).
+#   scripts/firmware.sh boards
+#       Lists the boards: name, Rust target, QEMU machine.
+#
+# Exit codes: 0 success; 1 the firmware reported a failure (run); 2 usage error or missing clip;
+# 3 toolchain or build failure; 124 QEMU timed out.
+#
+# Boards: lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F).
+# Clip: default firmware-example/clips/demo.mcb.
+# Toolchain: scripts/toolchain.sh (rustup target if installed, else Debian's -Zbuild-std route);
+# it installs missing packages itself (apt-get, root or sudo). Build/toolchain chatter goes to
+# stderr; stdout holds only the results described above.
+set -euo pipefail
+
+SCRIPT_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+# shellcheck source=scripts/toolchain.sh
+source "$SCRIPT_DIR/toolchain.sh"
+FW="$MOCAP_FIRMWARE_DIR"
+
+die() {
+    printf 'firmware.sh: error: %s\n' "$*" >&2
+    exit 2
+}
+
+build_failed() {
+    printf 'firmware.sh: error: %s\n' "$*" >&2
+    exit 3
+}
+
+usage() {
+    sed -n '2,/^$/p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+}
+
+# board -> target, QEMU machine arguments
+board_target() {
+    case "$1" in
+        lm3s6965) echo thumbv7m-none-eabi ;;
+        microbit) echo thumbv6m-none-eabi ;;
+        mps2-an386) echo thumbv7em-none-eabihf ;;
+        *) die "unknown board '$1' (expected lm3s6965, microbit or mps2-an386)" ;;
+    esac
+}
+
+board_qemu_args() {
+    case "$1" in
+        lm3s6965) echo "-machine lm3s6965evb -cpu cortex-m3" ;;
+        microbit) echo "-machine microbit" ;;
+        mps2-an386) echo "-machine mps2-an386" ;;
+    esac
+}
+
+# ---- arguments
+[ "$#" -ge 1 ] || { usage >&2; exit 2; }
+CMD="$1"
+shift
+BOARD=lm3s6965
+CLIP="$FW/clips/demo.mcb"
+ICOUNT=0
+TIMEOUT=300
+while [ "$#" -gt 0 ]; do
+    case "$1" in
+        --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
+        --board=*) BOARD="${1#*=}"; shift ;;
+        --clip) [ "$#" -ge 2 ] || die "--clip needs a value"; CLIP="$2"; shift 2 ;;
+        --clip=*) CLIP="${1#*=}"; shift ;;
+        --icount) ICOUNT=1; shift ;;
+        --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
+        --timeout=*) TIMEOUT="${1#*=}"; shift ;;
+        -h|--help) usage; exit 0 ;;
+        *) die "unknown argument '$1' (see: scripts/firmware.sh --help)" ;;
+    esac
+done
+case "$CMD" in
+    build|run|size) ;;
+    boards)
+        for b in lm3s6965 microbit mps2-an386; do
+            printf '%-11s %-22s %s\n' "$b" "$(board_target "$b")" "$(board_qemu_args "$b")"
+        done
+        exit 0 ;;
+    -h|--help|help) usage; exit 0 ;;
+    *) die "unknown command '$CMD' (build, run, size, boards)" ;;
+esac
+TARGET="$(board_target "$BOARD")"
+[[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be a whole number of seconds"
+
+# ---- build: prints the ELF path
+build() {
+    if [ ! -f "$CLIP" ]; then
+        if [ "$CLIP" = "$FW/clips/demo.mcb" ]; then
+            die "default clip $CLIP not found: pass --clip PATH.mcb (made with: mocap encode --target mcu IN.bvh -o OUT.mcb)"
+        fi
+        die "clip not found: $CLIP"
+    fi
+    local clip_abs sha staged target_dir lock elf_dir elf
+    clip_abs="$(cd "$(dirname "$CLIP")" && pwd)/$(basename "$CLIP")"
+    sha="$(sha256sum "$clip_abs" | cut -c1-16)"
+
+    mocap_toolchain_setup "$TARGET" >&2 || build_failed "toolchain setup failed (log: $MOCAP_TOOLCHAIN_LOG)"
+    mocap_toolchain_summary >&2
+
+    # The clip is staged under a name derived from its content: MOCAP_CLIP changes exactly when
+    # the bytes do, so cargo reruns build.rs (rerun-if-env-changed) without relying on mtimes.
+    mkdir -p "$FW/target/clips"
+    staged="$FW/target/clips/$sha.mcb"
+    if ! cmp -s "$clip_abs" "$staged" 2>/dev/null; then
+        cp "$clip_abs" "$staged.$$" && mv -f "$staged.$$" "$staged"
+    fi
+
+    target_dir="$FW/target/$BOARD"
+    elf_dir="$target_dir/elf"
+    elf="$elf_dir/mocap-firmware-$sha.elf"
+    mkdir -p "$elf_dir"
+    lock="$FW/target/$BOARD.lock"
+    # One build per board at a time; the ELF is copied out under the lock.
+    (
+        flock -w 1800 9 || build_failed "timed out waiting for $lock"
+        cd "$FW"
+        MOCAP_CLIP="$staged" CARGO_TARGET_DIR="$target_dir" \
+            mocap_cargo "$TARGET" build --release --no-default-features \
+            --features "board-$BOARD" >&2 \
+            || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
+        cp "$target_dir/$TARGET/release/mocap-firmware" "$elf.$$"
+        mv -f "$elf.$$" "$elf"
+    ) 9>"$lock"
+    printf '%s\n' "$elf"
+}
+
+run_qemu() {
+    local elf="$1" rc=0 qemu_args
+    read -r -a qemu_args <<<"$(board_qemu_args "$BOARD")"
+    [ "$ICOUNT" -eq 1 ] && qemu_args+=(-icount shift=0)
+    # No monitor, no display; UART0 (serial0) on stdout; stdin not shared with the caller.
+    timeout -k 10 "$TIMEOUT" qemu-system-arm "${qemu_args[@]}" \
+        -display none -monitor none -serial stdio \
+        -semihosting-config enable=on,target=native \
+        -kernel "$elf" </dev/null || rc=$?
+    if [ "$rc" -eq 124 ] || [ "$rc" -eq 137 ]; then
+        printf 'firmware.sh: error: QEMU (%s) did not finish within %s s\n' "$BOARD" "$TIMEOUT" >&2
+        exit 124
+    fi
+    exit "$rc"
+}
+
+# Sums of symbol sizes: decoder = mocap_decoder::* + the firmware's out-of-line calls into it
+# (decoder_glue, where LTO inlines decoder code) + crc::* (the decoder's CRC dependency).
+size_report() {
+    local elf="$1" size_tool="" nm_tool=""
+    if ! command -v llvm-size >/dev/null 2>&1 || ! command -v llvm-nm >/dev/null 2>&1; then
+        mocap_ensure_packages llvm >&2 || true
+    fi
+    command -v llvm-size >/dev/null 2>&1 && [ -z "${MOCAP_SIZE_NO_LLVM:-}" ] && size_tool=llvm-size
+    command -v llvm-nm >/dev/null 2>&1 && nm_tool=llvm-nm
+    [ -z "$nm_tool" ] && command -v nm >/dev/null 2>&1 && nm_tool=nm
+
+    local text data bss
+    if [ -n "$size_tool" ]; then
+        read -r text data bss _ < <("$size_tool" --format=berkeley "$elf" | sed -n 2p)
+    elif command -v readelf >/dev/null 2>&1; then
+        # Berkeley rules on the section headers: alloc+exec or read-only -> text, alloc+write
+        # progbits -> data, nobits -> bss.
+        read -r text data bss < <(readelf -S -W "$elf" | awk '
+            function hex(s,   i, n) {   # portable (mawk has no strtonum)
+                n = 0; s = tolower(s);
+                for (i = 1; i <= length(s); i++) n = n * 16 + index("0123456789abcdef", substr(s, i, 1)) - 1;
+                return n;
+            }
+            /^ *\[ *[0-9]+\]/ {
+                sub(/^ *\[ *[0-9]+\] */, "");
+                name=$1; type=$2; size=hex($5); flags=$7;
+                if (flags !~ /A/) next;
+                if (type == "NOBITS") bss += size;
+                else if (flags ~ /W/) data += size;
+                else text += size;
+            }
+            END { printf "%d %d %d\n", text, data, bss }')
+    else
+        die "neither llvm-size (package llvm) nor readelf (package binutils) is available"
+    fi
+    printf 'board=%s target=%s\n' "$BOARD" "$TARGET"
+    printf 'text=%s\ndata=%s\nbss=%s\n' "$text" "$data" "$bss"
+    printf 'flash_bytes=%s\nram_static_bytes=%s\n' "$((text + data))" "$((data + bss))"
+    local clip_bytes
+    clip_bytes="$(stat -c %s "$CLIP")"
+    printf 'flash_clip_bytes=%s\nflash_without_clip_bytes=%s\n' "$clip_bytes" "$((text + data - clip_bytes))"
+
+    if [ -z "$nm_tool" ]; then
+        printf 'decoder_code_bytes=unknown (no llvm-nm or nm)\n'
+        return 0
+    fi
+    # "address size type name", sizes in decimal, names demangled. Only code (t/T) is
+    # attributed: LTO merges constants into anonymous .rodata symbols that carry no crate name.
+    "$nm_tool" -S -C --defined-only --radix=d "$elf" 2>/dev/null | awk '
+        NF >= 4 && $3 ~ /^[tT]$/ {
+            size = $2 + 0; name = $0; sub(/^[^ ]+ [^ ]+ [^ ]+ /, "", name);
+            if (name ~ /mocap_decoder/) dec += size;
+            else if (name ~ /decoder_glue/) glue += size;
+            else if (name ~ /(^|[^a-z_])crc::/) crc += size;
+            else if (name ~ /core::fmt|FmtAdapter/) fmt += size;
+            else if (name ~ /^mocap_firmware::|^<mocap_firmware::|^main$/) fw += size;
+        }
+        END {
+            printf "decoder_code_bytes=%d\n", dec + glue + crc;
+            printf "decoder_code_breakdown mocap_decoder=%d decoder_glue=%d crc=%d\n", dec, glue, crc;
+            printf "core_fmt_code_bytes=%d\n", fmt;
+            printf "firmware_own_code_bytes=%d\n", fw;
+        }'
+}
+
+case "$CMD" in
+    build)
+        build ;;
+    run)
+        ELF="$(build)"
+        run_qemu "$ELF" ;;
+    size)
+        ELF="$(build)"
+        size_report "$ELF" ;;
+esac

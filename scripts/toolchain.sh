@@ -1,0 +1,236 @@
+#!/usr/bin/env bash
+# Cross toolchain for the Cortex-M firmware (firmware-example/) and QEMU.
+#
+#   source scripts/toolchain.sh            # defines the functions below, installs nothing yet
+#   mocap_toolchain_setup [TARGET...]      # ensure everything for these targets (default: all three)
+#   mocap_cargo TARGET ARGS...             # run cargo for TARGET the way this machine can:
+#                                          #   mocap_cargo thumbv7m-none-eabi build --release
+#   mocap_toolchain_summary                # print what was chosen
+#
+#   bash scripts/toolchain.sh [TARGET...]  # set up and print the summary
+#
+# Route per target, decided once by mocap_toolchain_setup:
+#   rustup  - `rustup target list --installed` has the target: plain `cargo ... --target T`.
+#             This is the ordinary way; on a machine with network run
+#             `rustup target add thumbv6m-none-eabi thumbv7m-none-eabi thumbv7em-none-eabihf`.
+#   debian  - otherwise: Debian's matching rustc-web + cargo-web + rust-web-src, building `core`
+#             from source: RUSTC_BOOTSTRAP=1 RUSTC=/usr/bin/rustc /usr/bin/cargo -Zbuild-std=core,
+#             linked with ld.lld (Debian's lld).
+# Always needed: qemu-system-arm (package qemu-system-arm). ld.lld (package lld) for the debian route.
+#
+# Packages are installed with apt-get (as root, or through sudo), `apt-get update` only when
+# something is missing, never interactively. Everything verbose goes to $MOCAP_TOOLCHAIN_LOG.
+#
+# Environment:
+#   MOCAP_TOOLCHAIN_LOG     log file (default: firmware-example/target/toolchain.log)
+#   MOCAP_TOOLCHAIN_ROUTE   force a route for every target: rustup | debian
+#
+# This file is meant to be sourced: it sets no shell options and never calls `exit`
+# (functions `return` non-zero and print the reason on stderr).
+
+MOCAP_FW_TARGETS="thumbv6m-none-eabi thumbv7m-none-eabi thumbv7em-none-eabihf"
+MOCAP_REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+MOCAP_FIRMWARE_DIR="$MOCAP_REPO_ROOT/firmware-example"
+: "${MOCAP_TOOLCHAIN_LOG:=$MOCAP_FIRMWARE_DIR/target/toolchain.log}"
+MOCAP_DEBIAN_RUSTC=/usr/bin/rustc
+MOCAP_DEBIAN_CARGO=/usr/bin/cargo
+MOCAP_DEBIAN_RUST_SRC=/usr/lib/rustlib/src/rust/library
+
+_mocap_log() {
+    mkdir -p "$(dirname "$MOCAP_TOOLCHAIN_LOG")" 2>/dev/null || true
+    printf '[%s] %s\n' "$(date '+%F %T')" "$*" >>"$MOCAP_TOOLCHAIN_LOG" 2>/dev/null || true
+}
+
+_mocap_err() {
+    printf 'toolchain: error: %s\n' "$*" >&2
+    _mocap_log "error: $*"
+}
+
+# Name of the variable holding the route of a target: thumbv7em-none-eabihf -> MOCAP_ROUTE_THUMBV7EM_NONE_EABIHF
+_mocap_route_var() {
+    local t="${1^^}"
+    printf 'MOCAP_ROUTE_%s' "${t//[-.]/_}"
+}
+
+_mocap_pkg_installed() {
+    [ "$(dpkg-query -W -f='${Status}' "$1" 2>/dev/null)" = "install ok installed" ]
+}
+
+# mocap_ensure_packages PKG... : install the Debian packages that are missing.
+mocap_ensure_packages() {
+    local missing=() p
+    for p in "$@"; do
+        _mocap_pkg_installed "$p" || missing+=("$p")
+    done
+    [ "${#missing[@]}" -eq 0 ] && return 0
+
+    if ! command -v apt-get >/dev/null 2>&1; then
+        _mocap_err "missing packages (${missing[*]}) and no apt-get on this machine; install them yourself"
+        return 1
+    fi
+    local sudo=()
+    if [ "$(id -u)" -ne 0 ]; then
+        if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+            sudo=(sudo -n)
+        else
+            _mocap_err "missing packages (${missing[*]}); run as root or with password-less sudo, or: apt-get install ${missing[*]}"
+            return 1
+        fi
+    fi
+
+    printf 'toolchain: installing %s (log: %s)\n' "${missing[*]}" "$MOCAP_TOOLCHAIN_LOG" >&2
+    _mocap_log "installing: ${missing[*]}"
+    local lock="${TMPDIR:-/tmp}/mocap-toolchain-apt.lock" rc=0
+    # Serialise concurrent callers (tests run in parallel); re-check under the lock.
+    (
+        if command -v flock >/dev/null 2>&1; then
+            exec 9>"$lock" && flock -w 900 9 || true
+        fi
+        still=()
+        for p in "${missing[@]}"; do _mocap_pkg_installed "$p" || still+=("$p"); done
+        [ "${#still[@]}" -eq 0 ] && exit 0
+        export DEBIAN_FRONTEND=noninteractive
+        apt_opts=(-y -q -o Dpkg::Use-Pty=0 -o DPkg::Lock::Timeout=600)
+        "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get -q -o DPkg::Lock::Timeout=600 update \
+            >>"$MOCAP_TOOLCHAIN_LOG" 2>&1 || exit 1
+        "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install "${apt_opts[@]}" "${still[@]}" \
+            >>"$MOCAP_TOOLCHAIN_LOG" 2>&1 || exit 1
+    ) || rc=$?
+    if [ "$rc" -ne 0 ]; then
+        _mocap_err "apt-get install ${missing[*]} failed; last lines of $MOCAP_TOOLCHAIN_LOG:"
+        tail -n 15 "$MOCAP_TOOLCHAIN_LOG" >&2 2>/dev/null || true
+        return 1
+    fi
+    for p in "${missing[@]}"; do
+        if ! _mocap_pkg_installed "$p"; then
+            _mocap_err "package $p is still not installed after apt-get install (log: $MOCAP_TOOLCHAIN_LOG)"
+            return 1
+        fi
+    done
+    _mocap_log "installed: ${missing[*]}"
+    return 0
+}
+
+# True when rustup's active toolchain (as seen from firmware-example/) has TARGET installed.
+_mocap_rustup_has_target() {
+    command -v rustup >/dev/null 2>&1 || return 1
+    command -v cargo >/dev/null 2>&1 || return 1
+    (cd "$MOCAP_FIRMWARE_DIR" 2>/dev/null || cd "$MOCAP_REPO_ROOT"; rustup target list --installed 2>/dev/null) \
+        | grep -qx -- "$1"
+}
+
+# mocap_toolchain_setup [TARGET...]: choose a route per target and install what is missing.
+mocap_toolchain_setup() {
+    local targets=("$@") t var route need_debian=0 hint=()
+    [ "${#targets[@]}" -eq 0 ] && read -r -a targets <<<"$MOCAP_FW_TARGETS"
+    _mocap_log "setup for: ${targets[*]}"
+
+    for t in "${targets[@]}"; do
+        var="$(_mocap_route_var "$t")"
+        case "${MOCAP_TOOLCHAIN_ROUTE:-}" in
+            rustup|debian) route="$MOCAP_TOOLCHAIN_ROUTE" ;;
+            "") if _mocap_rustup_has_target "$t"; then route=rustup; else route=debian; hint+=("$t"); fi ;;
+            *) _mocap_err "MOCAP_TOOLCHAIN_ROUTE must be rustup or debian, not '$MOCAP_TOOLCHAIN_ROUTE'"; return 1 ;;
+        esac
+        printf -v "$var" '%s' "$route"
+        export "${var?}"
+        [ "$route" = debian ] && need_debian=1
+        _mocap_log "$t: route $route"
+    done
+
+    local pkgs=(qemu-system-arm)
+    [ "$need_debian" -eq 1 ] && pkgs+=(rustc-web cargo-web rust-web-src lld)
+    mocap_ensure_packages "${pkgs[@]}" || return 1
+
+    if ! command -v qemu-system-arm >/dev/null 2>&1; then
+        _mocap_err "qemu-system-arm is not on PATH even though its package is installed"
+        return 1
+    fi
+    if [ "$need_debian" -eq 1 ]; then
+        local f
+        for f in "$MOCAP_DEBIAN_RUSTC" "$MOCAP_DEBIAN_CARGO"; do
+            [ -x "$f" ] || { _mocap_err "$f missing (package rustc-web/cargo-web)"; return 1; }
+        done
+        [ -d "$MOCAP_DEBIAN_RUST_SRC" ] || [ -d "$("$MOCAP_DEBIAN_RUSTC" --print sysroot)/lib/rustlib/src/rust/library" ] \
+            || { _mocap_err "rust library source missing (package rust-web-src)"; return 1; }
+        command -v ld.lld >/dev/null 2>&1 || { _mocap_err "ld.lld missing (package lld)"; return 1; }
+        if [ "${#hint[@]}" -gt 0 ]; then
+            MOCAP_TOOLCHAIN_HINT="no rustup target for ${hint[*]}: using Debian's rustc-web with -Zbuild-std=core (the ordinary way, with network: rustup target add ${hint[*]})"
+            _mocap_log "$MOCAP_TOOLCHAIN_HINT"
+        fi
+    fi
+    export MOCAP_TOOLCHAIN_READY=1
+    return 0
+}
+
+# mocap_toolchain_route TARGET: prints rustup|debian (runs the setup for TARGET if needed).
+mocap_toolchain_route() {
+    local var
+    var="$(_mocap_route_var "$1")"
+    if [ -z "${!var:-}" ]; then
+        mocap_toolchain_setup "$1" || return 1
+    fi
+    printf '%s\n' "${!var}"
+}
+
+# mocap_cargo TARGET CARGO-ARGS...: runs `cargo CARGO-ARGS... --target TARGET` through the route of
+# TARGET. Run it from the firmware directory (or pass --manifest-path).
+mocap_cargo() {
+    if [ "$#" -lt 2 ]; then
+        _mocap_err "usage: mocap_cargo TARGET CARGO-SUBCOMMAND [ARGS...]"
+        return 2
+    fi
+    local target="$1" route
+    shift
+    route="$(mocap_toolchain_route "$target")" || return 1
+    _mocap_log "cargo ($route) $* --target $target"
+    if [ "$route" = rustup ]; then
+        cargo "$@" --target "$target"
+    else
+        local upper="${target^^}"
+        upper="${upper//[-.]/_}"
+        env RUSTC_BOOTSTRAP=1 RUSTC="$MOCAP_DEBIAN_RUSTC" \
+            "CARGO_TARGET_${upper}_LINKER=ld.lld" \
+            "$MOCAP_DEBIAN_CARGO" "$@" -Zbuild-std=core --target "$target"
+    fi
+}
+
+# mocap_toolchain_summary: one line saying which route builds which target, and the emulator.
+mocap_toolchain_summary() {
+    local t var rustup_t=() debian_t=() parts=() qemu_v v
+    for t in $MOCAP_FW_TARGETS; do
+        var="$(_mocap_route_var "$t")"
+        case "${!var:-}" in
+            rustup) rustup_t+=("$t") ;;
+            debian) debian_t+=("$t") ;;
+        esac
+    done
+    if [ "${#rustup_t[@]}" -gt 0 ]; then
+        v="$(cd "$MOCAP_FIRMWARE_DIR" && rustc --version 2>/dev/null | cut -d' ' -f2)"
+        parts+=("rustup ${v:-?} for ${rustup_t[*]}")
+    fi
+    if [ "${#debian_t[@]}" -gt 0 ]; then
+        v="$("$MOCAP_DEBIAN_RUSTC" --version 2>/dev/null | cut -d' ' -f2)"
+        parts+=("debian rustc-web ${v:-?} -Zbuild-std=core + ld.lld for ${debian_t[*]}")
+    fi
+    qemu_v="$(qemu-system-arm --version 2>/dev/null | head -n1 | sed 's/^QEMU emulator version //; s/ .*//')"
+    local joined="" part
+    for part in "${parts[@]}"; do joined="${joined:+$joined; }$part"; done
+    printf 'toolchain: %s; qemu-system-arm %s (log: %s)\n' "$joined" "${qemu_v:-?}" "$MOCAP_TOOLCHAIN_LOG"
+    [ "${#debian_t[@]}" -gt 0 ] && printf 'toolchain: hint: `rustup target add %s` is the ordinary way (needs network); plain cargo is then used\n' "${debian_t[*]}"
+    return 0
+}
+
+# Run directly: set up and report.
+if [ "${BASH_SOURCE[0]}" = "$0" ]; then
+    set -euo pipefail
+    for arg in "$@"; do
+        case "$arg" in
+            -h|--help) sed -n '2,/^$/p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+            thumb*) ;;
+            *) printf 'toolchain: unknown argument %s (expected targets: %s)\n' "$arg" "$MOCAP_FW_TARGETS" >&2; exit 2 ;;
+        esac
+    done
+    mocap_toolchain_setup "$@"
+    mocap_toolchain_summary
+fi

@@ -1,0 +1,60 @@
+//! Shared helpers for the workspace tests: where the corpus is, and a
+//! visible skip when it is not there.
+
+use std::path::PathBuf;
+
+/// The corpus folder: `$MOCAP_CORPUS`, else `../shared/data` beside the
+/// workspace root.
+pub fn corpus_dir() -> PathBuf {
+    match std::env::var_os("MOCAP_CORPUS") {
+        Some(p) => PathBuf::from(p),
+        None => PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data")),
+    }
+}
+
+/// The `.bvh` files of one corpus folder (`cmu`, `iclone-cmu`), sorted, or
+/// `None` after printing a visible SKIPPED line when the corpus is absent.
+pub fn corpus_files(folder: &str) -> Option<Vec<PathBuf>> {
+    let dir = corpus_dir().join(folder);
+    let Ok(rd) = std::fs::read_dir(&dir) else {
+        eprintln!(
+            "SKIPPED: corpus not found at {} (set MOCAP_CORPUS)",
+            dir.display()
+        );
+        println!("SKIPPED: corpus not found at {} (set MOCAP_CORPUS)", dir.display());
+        return None;
+    };
+    let mut files: Vec<PathBuf> = rd
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "bvh"))
+        .collect();
+    files.sort();
+    Some(files)
+}
+
+/// The workspace root.
+pub fn workspace_root() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+}
+
+/// Decodes `bytes` in every way the player offers, returning an error or
+/// nothing; used by the corruption test and the fuzz target's logic. Any
+/// panic inside is a bug.
+pub fn exercise_decoder(bytes: &[u8]) -> Result<u64, mocap_decoder::Error> {
+    use mocap_decoder::{Clip, Player};
+    let clip = Clip::parse(bytes)?;
+    let mut player = Player::<512>::new(&clip)?;
+    let mut out = [0i32; 512];
+    let mut sum = 0u64;
+    // Walk headers too: names, channels.
+    sum += clip.header().joints().count() as u64 + clip.header().channels().count() as u64;
+    while let Some(_) = player.next_frame(&mut out)? {
+        sum = sum.wrapping_add(out[0] as u64);
+    }
+    let frames = player.frame_count();
+    player.frame(frames / 2, &mut out)?;
+    player.frame(0, &mut out)?;
+    player.sample_at(clip.header().duration_us() / 3, &mut out)?;
+    player.sample_at(u64::MAX, &mut out)?;
+    Ok(sum)
+}

@@ -1,0 +1,93 @@
+//! Encode → decode of every corpus file with the measured error within the
+//! requested bound (measured by decoding with the `no_std` decoder and
+//! independently re-measured here from the decoded clip).
+
+use mocap_decoder::Clip;
+use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+use mocap_encoder::{bvh, clipfile, fixed, metrics, units};
+use mocap_tests::corpus_files;
+
+fn roundtrip(folder: &str, bound: &str) {
+    let Some(files) = corpus_files(folder) else { return };
+    assert!(!files.is_empty(), "no .bvh files in {folder}");
+    let spec: BoundSpec = bound.parse().unwrap();
+    let b = Bound::from_specs(&[spec]);
+    let (mut raw, mut clips) = (0usize, 0usize);
+    for file in &files {
+        let m = bvh::read_file(file).unwrap();
+        let unit = units::detect(&m);
+        let opts = EncodeOptions {
+            codec: CodecChoice::Index,
+            bound: b,
+            metres_per_unit: unit.metres(),
+            key_interval: None,
+        };
+        let enc = encode::encode(&m, &opts).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        // Independent check: decode the bytes again, measure again.
+        let clip = Clip::parse(&enc.bytes).unwrap();
+        let frames = clipfile::decode_all(&clip).unwrap();
+        let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
+        let x = metrics::compare(&m, &back, unit.metres(), None, enc.bytes.len(), 0);
+        assert_eq!(x, enc.metrics, "{}: encoder's own metrics differ", file.display());
+        assert!(b.holds(&x), "{} at {bound}: {x:?}", file.display());
+        match spec {
+            BoundSpec::Degrees(d) => assert!(x.angle_max_deg <= d),
+            BoundSpec::Millimetres(mm) => assert!(x.max_joint_err_mm <= mm),
+        }
+        raw += m.frames() * m.channels() * 4;
+        clips += enc.bytes.len();
+        eprintln!(
+            "{folder}/{} @ {bound}: {} bytes, ratio {:.2}, angle max {:.3}°, joint max {:.2} mm",
+            file.file_name().unwrap().to_string_lossy(),
+            enc.bytes.len(),
+            x.ratio_f32,
+            x.angle_max_deg,
+            x.max_joint_err_mm
+        );
+    }
+    eprintln!("{folder} @ {bound}: aggregate ratio {:.2}", raw as f64 / clips as f64);
+}
+
+#[test]
+fn cmu_at_1deg() {
+    roundtrip("cmu", "1deg");
+}
+
+#[test]
+fn cmu_at_quarter_deg() {
+    roundtrip("cmu", "0.25deg");
+}
+
+#[test]
+fn cmu_at_20mm() {
+    roundtrip("cmu", "20mm");
+}
+
+#[test]
+fn iclone_at_1deg() {
+    roundtrip("iclone-cmu", "1deg");
+}
+
+#[test]
+fn iclone_at_20mm() {
+    roundtrip("iclone-cmu", "20mm");
+}
+
+#[test]
+fn index_35_01_reaches_ratio_6_at_1deg() {
+    let Some(files) = corpus_files("cmu") else { return };
+    let Some(f) = files.iter().find(|p| p.ends_with("35_01.bvh")) else {
+        panic!("35_01.bvh missing from the corpus");
+    };
+    let m = bvh::read_file(f).unwrap();
+    let opts = EncodeOptions {
+        codec: CodecChoice::Index,
+        bound: Bound::from_specs(&["1deg".parse().unwrap()]),
+        metres_per_unit: units::detect(&m).metres(),
+        key_interval: None,
+    };
+    let enc = encode::encode(&m, &opts).unwrap();
+    eprintln!("35_01 @ 1deg: {:?}", enc.metrics);
+    assert!(enc.metrics.angle_max_deg <= 1.0);
+    assert!(enc.metrics.ratio_f32 >= 6.0, "ratio {}", enc.metrics.ratio_f32);
+}

@@ -1,0 +1,98 @@
+//! Thousands of truncated and bit-flipped clips go through the decoder; each
+//! must give an `Err` or valid output, never a panic. Half of the mutants
+//! get their CRC re-sealed so the mutation reaches the header and codec
+//! parsers instead of stopping at the checksum.
+
+use mocap_encoder::container::CRC32;
+use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+use mocap_encoder::{bvh, generate, units};
+use mocap_tests::{corpus_files, exercise_decoder};
+
+/// A small deterministic PRNG (xorshift64*), so failures reproduce.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+fn reseal(mut v: Vec<u8>) -> Vec<u8> {
+    if v.len() >= 4 {
+        let n = v.len() - 4;
+        let crc = CRC32.checksum(&v[..n]);
+        v[n..].copy_from_slice(&crc.to_le_bytes());
+    }
+    v
+}
+
+fn encode_at(m: &mocap_encoder::motion::Motion, bound: &str, key_interval: Option<u16>) -> Vec<u8> {
+    let opts = EncodeOptions {
+        codec: CodecChoice::Index,
+        bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
+        metres_per_unit: units::detect(m).metres(),
+        key_interval,
+    };
+    encode::encode(m, &opts).unwrap().bytes
+}
+
+fn hammer(name: &str, clip: &[u8], rounds: usize, seed: u64) -> (usize, usize) {
+    assert!(exercise_decoder(clip).is_ok(), "{name}: the valid clip must decode");
+    let mut rng = Rng(seed);
+    let (mut ok, mut err) = (0, 0);
+    let mut tally = |r: Result<u64, mocap_decoder::Error>| match r {
+        Ok(_) => ok += 1,
+        Err(_) => err += 1,
+    };
+    // Every truncation point near the start, sampled ones further on.
+    for len in (0..clip.len().min(400)).chain((0..200).map(|_| rng.below(clip.len()))) {
+        tally(exercise_decoder(&clip[..len]));
+        tally(exercise_decoder(&reseal(clip[..len].to_vec())));
+    }
+    for _ in 0..rounds {
+        let mut v = clip.to_vec();
+        let flips = 1 + rng.below(4);
+        for _ in 0..flips {
+            // Bias towards the structural front of the file.
+            let at = if rng.below(2) == 0 {
+                rng.below(v.len().min(512))
+            } else {
+                rng.below(v.len())
+            };
+            v[at] ^= 1 << rng.below(8);
+        }
+        if rng.below(8) == 0 {
+            let at = rng.below(v.len());
+            v[at] = [0x00, 0xFF, 0x80, 0x7F][rng.below(4)];
+        }
+        tally(exercise_decoder(&v));
+        tally(exercise_decoder(&reseal(v)));
+    }
+    (ok, err)
+}
+
+#[test]
+fn demo_clip_mutants_never_panic() {
+    let m = generate::animatronic_demo();
+    for k in [None, Some(0), Some(8)] {
+        let clip = encode_at(&m, "1deg", k);
+        let (ok, err) = hammer("demo", &clip, 3000, 0x5EED ^ u64::from(k.unwrap_or(99)));
+        eprintln!("demo K={k:?}: {ok} decoded, {err} rejected");
+        assert!(err > 0);
+    }
+}
+
+#[test]
+fn corpus_clip_mutants_never_panic() {
+    let Some(files) = corpus_files("cmu") else { return };
+    let file = files.iter().find(|p| p.ends_with("35_17.bvh")).unwrap_or(&files[0]);
+    let m = bvh::read_file(file).unwrap();
+    let clip = encode_at(&m, "1deg", Some(16));
+    let (ok, err) = hammer("35_17", &clip, 3000, 0xC0FFEE);
+    eprintln!("35_17: {ok} decoded, {err} rejected");
+}
