@@ -26,17 +26,24 @@ impl<'a> BitReader<'a> {
         r
     }
 
-    /// Reads `n` bits, `n <= 24`, first bit in the result's bit 0.
+    /// Reads `n` bits, `n <= 15` (larger `n` are reduced modulo 16), first
+    /// bit in the result's bit 0. One 16-bit refill at most per read keeps
+    /// the hot path to a compare, a mask and two shifts.
     #[inline(always)]
     pub(crate) fn read(&mut self, n: u32) -> u32 {
-        while self.avail < n {
-            let b = self.bytes.get(self.next_byte).copied().unwrap_or(0);
-            self.acc |= u32::from(b) << self.avail;
-            self.next_byte = self.next_byte.wrapping_add(1);
-            self.avail += 8;
+        let n = n & 15;
+        if self.avail < 16 {
+            let at = self.next_byte;
+            let half = match self.bytes.get(at..at.wrapping_add(2)) {
+                Some(&[lo, hi]) => u32::from(u16::from_le_bytes([lo, hi])),
+                _ => u32::from(self.bytes.get(at).copied().unwrap_or(0)),
+            };
+            self.acc |= half << self.avail;
+            self.next_byte = at.wrapping_add(2);
+            self.avail += 16;
         }
         let v = self.acc & ((1u32 << n) - 1);
-        self.acc = self.acc.checked_shr(n).unwrap_or(0);
+        self.acc >>= n;
         self.avail -= n;
         v
     }

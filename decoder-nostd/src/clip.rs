@@ -5,8 +5,15 @@ use crate::error::Error;
 use crate::header::Header;
 use crate::reader::Reader;
 
-/// CRC-32/ISO-HDLC (the zlib/PNG CRC), SPEC.md §2.3.
-pub(crate) const CRC32: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+/// CRC-32/ISO-HDLC (the zlib/PNG CRC), SPEC.md §2.3. With the `crc-table`
+/// feature a 1 KB table in flash makes it about six times faster; without
+/// it the bitwise form costs no table.
+#[cfg(feature = "crc-table")]
+pub(crate) const CRC32: crc::Crc<u32, crc::Table<1>> =
+    crc::Crc::<u32, crc::Table<1>>::new(&crc::CRC_32_ISO_HDLC);
+#[cfg(not(feature = "crc-table"))]
+pub(crate) const CRC32: crc::Crc<u32, crc::NoTable> =
+    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 
 /// One section of a clip: its id and its bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

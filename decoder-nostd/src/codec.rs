@@ -106,23 +106,24 @@ impl<'a> IndexCodec<'a> {
             self.delta_desc
         };
         let mut bits = BitReader::at(self.payload, self.frame_bit_offset(frame));
+        let table = self.table;
         for (d, value) in desc.chunks_exact(DESCRIPTOR_LEN).zip(state.iter_mut()) {
-            let [width, shift_flags, o0, o1, b0, b1, b2, b3] = *d else {
+            let Ok(d) = <&[u8; DESCRIPTOR_LEN]>::try_from(d) else {
                 continue;
             };
-            let idx = bits.read(u32::from(width)) as usize;
-            let at = (usize::from(u16::from_le_bytes([o0, o1])) + idx) * 2;
-            let entry = match self.table.get(at..at + 2) {
+            // Bytes 0-3 as one word: width | shift+flags << 8 | table << 16.
+            let word = u32::from_le_bytes([d[0], d[1], d[2], d[3]]);
+            let base = i32::from_le_bytes([d[4], d[5], d[6], d[7]]);
+            let idx = bits.read(word & 0xFF);
+            let at = (((word >> 16) + idx) as usize) * 2;
+            let entry = match table.get(at..at + 2) {
                 Some(&[lo, hi]) => i16::from_le_bytes([lo, hi]),
                 _ => 0,
             };
-            let base = i32::from_le_bytes([b0, b1, b2, b3]);
-            let v = base.wrapping_add(i32::from(entry) << u32::from(shift_flags & SHIFT_MASK));
-            *value = if shift_flags & FLAG_ACCUMULATE != 0 {
-                value.wrapping_add(v)
-            } else {
-                v
-            };
+            let v = base.wrapping_add(i32::from(entry) << ((word >> 8) & u32::from(SHIFT_MASK)));
+            // All ones when the accumulate flag (bit 15 of the word) is set.
+            let keep = ((word << 16) as i32) >> 31;
+            *value = v.wrapping_add(*value & keep);
         }
     }
 }
