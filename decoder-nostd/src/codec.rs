@@ -73,7 +73,7 @@ impl<'a> IndexCodec<'a> {
 
     /// True when frame `i` is coded with absolute (key) descriptors.
     pub(crate) fn is_key(&self, frame: u32) -> bool {
-        self.key_interval == 0 || frame % self.key_interval == 0
+        self.key_interval == 0 || frame.is_multiple_of(self.key_interval)
     }
 
     /// The key frame at or before `frame`.

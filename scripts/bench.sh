@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Every figure of BENCHMARKS.md in one run:
+#  1. `mocap bench` over the corpus folders at 1°, 0.25° and 20 mm (ratios, errors);
+#  2. decode cost in QEMU with -icount shift=0 on Cortex-M0/M3/M4F for one CMU clip;
+#  3. firmware and decoder sizes, decoder state size.
+#   bash scripts/bench.sh [CLIP.bvh]   (default: $MOCAP_CORPUS/cmu/35_01.bvh)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+corpus="${MOCAP_CORPUS:-../shared/data}"
+source scripts/toolchain.sh
+mocap_toolchain_setup >&2
+cargo build --release -q -p mocap-encoder
+mocap=target/release/mocap
+out=target/bench
+mkdir -p "$out"
+
+echo "## Rate–distortion (mocap bench)"
+echo
+/usr/bin/time -f "encode wall time for the whole run: %e s" \
+    "$mocap" bench "$corpus/cmu" "$corpus/iclone-cmu" \
+    --max-error 1deg --max-error 0.25deg --max-error 20mm --json "$out/bench.json" 2>"$out/bench.log"
+tail -1 "$out/bench.log"
+echo
+
+clip_src="${1:-$corpus/cmu/35_01.bvh}"
+"$mocap" encode "$clip_src" -o "$out/clip.mcb" --max-error 1deg >/dev/null 2>&1
+channels=$("$mocap" info "$out/clip.mcb" | sed -n 's/.* × \([0-9]*\) channels.*/\1/p')
+echo "## Decode cost in QEMU (-icount shift=0), $(basename "$clip_src") at 1°, $channels channels"
+echo
+echo "| core | board | instructions/frame | instructions/channel/frame | Clip::parse (CRC incl.) | Player::new | stack used B | Player<320> state B |"
+echo "|---|---|---|---|---|---|---|---|"
+for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
+    board=${b%%:*}; core=${b##*:}
+    bash scripts/firmware.sh run --board "$board" --clip "$out/clip.mcb" --icount 2>/dev/null >"$out/uart-$board.txt"
+    get() { sed -n "s/.*$1=\([0-9]*\).*/\1/p" "$out/uart-$board.txt" | head -1; }
+    pc=$(sed -n 's/^# decode_instructions_total=.* per_channel_x100=\([0-9]*\).*/\1/p' "$out/uart-$board.txt")
+    echo "| $core | $board | $(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\).*/\1/p' "$out/uart-$board.txt") | $((pc / 100)).$(printf %02d $((pc % 100))) | $(get parse_instructions) | $(get player_new_instructions) | $(get stack_bytes_used) | $(get state_bytes) |"
+done
+echo
+echo "## Flash (opt-level = \"s\", LTO), same clip"
+echo
+echo '```text'
+for board in microbit lm3s6965 mps2-an386; do
+    bash scripts/firmware.sh size --board "$board" --clip "$out/clip.mcb" 2>/dev/null | tr '\n' ' '
+    echo
+done
+echo '```'

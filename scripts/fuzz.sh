@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Fuzz Clip::parse + every way of playing (decoder-nostd/fuzz). Needs a
+# nightly toolchain and cargo-fuzz (`cargo install cargo-fuzz`). The corpus is
+# seeded with real clips: the shipped demo and, when present, clips encoded
+# from the CMU corpus, so the fuzzer starts from valid files.
+#   bash scripts/fuzz.sh [SECONDS]      (default 120)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+secs="${1:-120}"
+seeds=decoder-nostd/fuzz/corpus/parse_and_play
+mkdir -p "$seeds"
+cp firmware-example/clips/demo.mcb "$seeds/demo.mcb"
+cargo build --release -q -p mocap-encoder
+corpus="${MOCAP_CORPUS:-../shared/data}"
+for f in "$corpus"/cmu/35_17.bvh "$corpus"/cmu/09_01.bvh; do
+    [ -f "$f" ] || continue
+    for k in 0 8; do
+        target/release/mocap encode "$f" -o "$seeds/$(basename "$f" .bvh)_k$k.mcb" --key-interval "$k" >/dev/null 2>&1
+    done
+done
+cd decoder-nostd/fuzz
+cargo +nightly fuzz run parse_and_play -- -max_total_time="$secs" -max_len=65536
