@@ -25,6 +25,52 @@ pub enum ChannelKind {
 }
 
 impl ChannelKind {
+    /// All kinds, in the order of their codes (SPEC.md §3.2).
+    pub const ALL: [ChannelKind; 6] = [
+        ChannelKind::Xposition,
+        ChannelKind::Yposition,
+        ChannelKind::Zposition,
+        ChannelKind::Xrotation,
+        ChannelKind::Yrotation,
+        ChannelKind::Zrotation,
+    ];
+
+    /// The kind's code (SPEC.md §3.2).
+    pub fn code(self) -> u8 {
+        match self {
+            ChannelKind::Xposition => consts::kind::X_POSITION,
+            ChannelKind::Yposition => consts::kind::Y_POSITION,
+            ChannelKind::Zposition => consts::kind::Z_POSITION,
+            ChannelKind::Xrotation => consts::kind::X_ROTATION,
+            ChannelKind::Yrotation => consts::kind::Y_ROTATION,
+            ChannelKind::Zrotation => consts::kind::Z_ROTATION,
+        }
+    }
+
+    /// Parses a BVH channel name, ASCII case-insensitively (exporters vary).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(name))
+    }
+
+    /// True for the three rotation kinds.
+    pub fn is_rotation(self) -> bool {
+        matches!(
+            self,
+            ChannelKind::Xrotation | ChannelKind::Yrotation | ChannelKind::Zrotation
+        )
+    }
+
+    /// Axis index: 0 = X, 1 = Y, 2 = Z.
+    pub fn axis(self) -> usize {
+        match self {
+            ChannelKind::Xposition | ChannelKind::Xrotation => 0,
+            ChannelKind::Yposition | ChannelKind::Yrotation => 1,
+            ChannelKind::Zposition | ChannelKind::Zrotation => 2,
+        }
+    }
+
     /// Decodes a kind code of §3.2.
     pub fn from_code(code: u8) -> Option<Self> {
         match code {
@@ -48,6 +94,12 @@ impl ChannelKind {
             ChannelKind::Yrotation => "Yrotation",
             ChannelKind::Zrotation => "Zrotation",
         }
+    }
+}
+
+impl core::fmt::Display for ChannelKind {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.name())
     }
 }
 

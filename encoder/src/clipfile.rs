@@ -4,7 +4,7 @@
 use mocap_decoder::{Clip, Player};
 
 use crate::fixed;
-use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
+use crate::motion::{Joint, Motion, Skeleton};
 
 /// Largest channel count the host tools decode.
 pub const HOST_MAX_CHANNELS: usize = 4096;
@@ -33,17 +33,7 @@ pub fn skeleton(clip: &Clip<'_>) -> Skeleton {
                 name: j.name.to_string(),
                 parent: j.parent.map(|p| p as usize),
                 offset: j.offset_um.map(|o| f64::from(o) / unit),
-                channels: j
-                    .channel_kinds()
-                    .map(|k| match k {
-                        mocap_decoder::ChannelKind::Xposition => ChannelKind::Xposition,
-                        mocap_decoder::ChannelKind::Yposition => ChannelKind::Yposition,
-                        mocap_decoder::ChannelKind::Zposition => ChannelKind::Zposition,
-                        mocap_decoder::ChannelKind::Xrotation => ChannelKind::Xrotation,
-                        mocap_decoder::ChannelKind::Yrotation => ChannelKind::Yrotation,
-                        mocap_decoder::ChannelKind::Zrotation => ChannelKind::Zrotation,
-                    })
-                    .collect(),
+                channels: j.channel_kinds().collect(),
                 end_site: j.end_site,
             })
             .collect(),

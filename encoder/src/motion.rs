@@ -2,96 +2,10 @@
 //! hierarchy (skeleton) plus a frames × channels matrix of values in the
 //! file's own units (lengths) and degrees (angles).
 
-use std::fmt;
-
-/// One BVH channel type. Rotations are in degrees, positions in the
+/// One BVH channel type: the decoder's own type (SPEC.md §3.2), so the two
+/// sides cannot disagree. Rotations are in degrees, positions in the
 /// skeleton's length unit (see [`crate::units::LengthUnit`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ChannelKind {
-    /// Translation along X.
-    Xposition,
-    /// Translation along Y.
-    Yposition,
-    /// Translation along Z.
-    Zposition,
-    /// Rotation about X, degrees.
-    Xrotation,
-    /// Rotation about Y, degrees.
-    Yrotation,
-    /// Rotation about Z, degrees.
-    Zrotation,
-}
-
-impl ChannelKind {
-    /// All kinds, in the order of their bitstream codes (SPEC.md §3.2).
-    pub const ALL: [ChannelKind; 6] = [
-        ChannelKind::Xposition,
-        ChannelKind::Yposition,
-        ChannelKind::Zposition,
-        ChannelKind::Xrotation,
-        ChannelKind::Yrotation,
-        ChannelKind::Zrotation,
-    ];
-
-    /// The name as written in a BVH `CHANNELS` line.
-    pub fn bvh_name(self) -> &'static str {
-        match self {
-            ChannelKind::Xposition => "Xposition",
-            ChannelKind::Yposition => "Yposition",
-            ChannelKind::Zposition => "Zposition",
-            ChannelKind::Xrotation => "Xrotation",
-            ChannelKind::Yrotation => "Yrotation",
-            ChannelKind::Zrotation => "Zrotation",
-        }
-    }
-
-    /// Parses a BVH channel name (case-insensitive, as exporters vary).
-    pub fn from_bvh_name(s: &str) -> Option<ChannelKind> {
-        ChannelKind::ALL
-            .into_iter()
-            .find(|k| k.bvh_name().eq_ignore_ascii_case(s))
-    }
-
-    /// True for the three rotation kinds.
-    pub fn is_rotation(self) -> bool {
-        matches!(
-            self,
-            ChannelKind::Xrotation | ChannelKind::Yrotation | ChannelKind::Zrotation
-        )
-    }
-
-    /// Axis index 0 = X, 1 = Y, 2 = Z.
-    pub fn axis(self) -> usize {
-        match self {
-            ChannelKind::Xposition | ChannelKind::Xrotation => 0,
-            ChannelKind::Yposition | ChannelKind::Yrotation => 1,
-            ChannelKind::Zposition | ChannelKind::Zrotation => 2,
-        }
-    }
-
-    /// The bitstream code of this kind (SPEC.md §3.2).
-    pub fn code(self) -> u8 {
-        match self {
-            ChannelKind::Xposition => 0,
-            ChannelKind::Yposition => 1,
-            ChannelKind::Zposition => 2,
-            ChannelKind::Xrotation => 3,
-            ChannelKind::Yrotation => 4,
-            ChannelKind::Zrotation => 5,
-        }
-    }
-
-    /// Inverse of [`ChannelKind::code`].
-    pub fn from_code(code: u8) -> Option<ChannelKind> {
-        ChannelKind::ALL.get(usize::from(code)).copied()
-    }
-}
-
-impl fmt::Display for ChannelKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.bvh_name())
-    }
-}
+pub use mocap_decoder::ChannelKind;
 
 /// A joint of the hierarchy. End Sites are joints with `end_site == true`
 /// and no channels; they matter for forward kinematics (they are the tips
