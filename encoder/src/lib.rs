@@ -12,4 +12,6 @@ pub mod generate;
 pub mod kinematics;
 pub mod metrics;
 pub mod motion;
+pub mod plot;
+pub mod track;
 pub mod units;

@@ -91,6 +91,9 @@ enum Command {
         /// Length unit of the input.
         #[arg(long, default_value = "auto")]
         units: UnitArg,
+        /// Also draw the per-frame joint-position error (`.svg` or `.png`).
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
     /// Rate–distortion table over files or folders of BVH.
     Bench {
@@ -102,7 +105,12 @@ enum Command {
         /// Write the rows as JSON here too.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Also draw the rate–distortion plot (`.svg` or `.png`).
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
+    /// Motion Track picture (Hu et al. 2010): clips as curves in a 2-D map of key poses.
+    Track(mocap_encoder::track::TrackArgs),
     /// Write the procedural demo clip the project ships.
     Generate {
         /// Output BVH file.
@@ -251,6 +259,7 @@ fn run(cli: Cli) -> Result<(), String> {
             clip: clip_path,
             json,
             units: unit_arg,
+            plot,
         } => {
             let m = bvh::read_file(&input).map_err(|e| e.to_string())?;
             let unit = resolve_units(&unit_arg, &m);
@@ -272,6 +281,10 @@ fn run(cli: Cli) -> Result<(), String> {
             let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
             let file_bytes = std::fs::metadata(&input).map(|x| x.len() as usize).unwrap_or(0);
             let x = metrics::compare(&m, &back, unit.metres(), None, bytes.len(), file_bytes);
+            if let Some(p) = plot {
+                mocap_encoder::plot::frame_error_plot(&p, &m, &back, unit.metres(), &clip_path.display().to_string())?;
+                eprintln!("wrote {}", p.display());
+            }
             if json {
                 println!("{}", serde_json::to_string(&x).map_err(|e| e.to_string())?);
             } else {
@@ -289,7 +302,12 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             Ok(())
         }
-        Command::Bench { paths, max_error, json } => {
+        Command::Bench {
+            paths,
+            max_error,
+            json,
+            plot,
+        } => {
             let specs = max_error
                 .iter()
                 .map(|s| s.parse::<BoundSpec>())
@@ -299,8 +317,13 @@ fn run(cli: Cli) -> Result<(), String> {
             if let Some(p) = json {
                 write(&p, serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?.as_bytes())?;
             }
+            if let Some(p) = plot {
+                mocap_encoder::plot::rate_distortion_plot(&p, &rows)?;
+                eprintln!("wrote {}", p.display());
+            }
             Ok(())
         }
+        Command::Track(args) => mocap_encoder::track::run(&args),
         Command::Generate { output } => {
             bvh::write_file(&generate::animatronic_demo(), &output)
                 .map_err(|e| format!("{}: {e}", output.display()))?;

@@ -1,0 +1,245 @@
+//! Drawing a Motion Track picture with plotters (SVG or PNG by extension).
+//!
+//! Dark background as in the paper; key frames are grey squares (one per key
+//! frame); each clip is one polyline in its own colour (one path per clip)
+//! with a dot per frame whose brightness shows the joint angular speed
+//! (dark = slow, white = fast); a legend names the clips.
+//!
+//! Text is laid out with ab_glyph and the Hack font that the
+//! `epaint_default_fonts` crate ships, so no system font library is needed.
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::Track;
+
+/// Fill of the key-frame markers.
+pub const KEY_COLOUR: RGBColor = RGBColor(0x80, 0x80, 0x80);
+/// Background.
+pub const BACKGROUND: RGBColor = RGBColor(0x14, 0x14, 0x18);
+/// Clip colours (Tableau 10), in legend order; clip i uses `PALETTE[i % 10]`.
+pub const PALETTE: [RGBColor; 10] = [
+    RGBColor(0x1f, 0x77, 0xb4),
+    RGBColor(0xff, 0x7f, 0x0e),
+    RGBColor(0x2c, 0xa0, 0x2c),
+    RGBColor(0xd6, 0x27, 0x28),
+    RGBColor(0x94, 0x67, 0xbd),
+    RGBColor(0x8c, 0x56, 0x4b),
+    RGBColor(0xe3, 0x77, 0xc2),
+    RGBColor(0xbc, 0xbd, 0x22),
+    RGBColor(0x17, 0xbe, 0xcf),
+    RGBColor(0x7f, 0x7f, 0x7f),
+];
+
+/// Registers the bundled font as "sans-serif" (idempotent).
+pub fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            epaint_default_fonts::HACK_REGULAR,
+        );
+    });
+}
+
+/// Writes the picture to `path` (`.svg`, else PNG); the view spans the key
+/// frames and the tracks.
+pub fn render(
+    path: &Path,
+    title: &str,
+    tracks: &[Track],
+    key_xy: &[[f64; 2]],
+) -> Result<(), String> {
+    render_view(path, title, tracks, key_xy, false)
+}
+
+/// Like [`render`]; with `zoom` the view spans the tracks only (key frames
+/// outside it are left out).
+pub fn render_view(
+    path: &Path,
+    title: &str,
+    tracks: &[Track],
+    key_xy: &[[f64; 2]],
+    zoom: bool,
+) -> Result<(), String> {
+    register_font();
+    let size = (1300u32, 1000u32);
+    let svg = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    let r = if svg {
+        draw(
+            SVGBackend::new(path, size).into_drawing_area(),
+            title,
+            tracks,
+            key_xy,
+            zoom,
+        )
+    } else {
+        draw(
+            BitMapBackend::new(path, size).into_drawing_area(),
+            title,
+            tracks,
+            key_xy,
+            zoom,
+        )
+    };
+    r.map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn lerp(a: RGBColor, b: RGBColor, t: f64) -> RGBColor {
+    let f = |x: u8, y: u8| {
+        (f64::from(x) + (f64::from(y) - f64::from(x)) * t)
+            .round()
+            .clamp(0.0, 255.0) as u8
+    };
+    RGBColor(f(a.0, b.0), f(a.1, b.1), f(a.2, b.2))
+}
+
+/// Colour of a frame dot: the clip colour, darker when slow, whiter when fast.
+pub fn speed_colour(base: RGBColor, t: f64) -> RGBColor {
+    let t = t.clamp(0.0, 1.0);
+    let dark = lerp(BACKGROUND, base, 0.25);
+    if t < 0.5 {
+        lerp(dark, base, t * 2.0)
+    } else {
+        lerp(base, RGBColor(255, 255, 255), (t - 0.5) * 1.6)
+    }
+}
+
+fn percentile(v: &mut [f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    tracks: &[Track],
+    key_xy: &[[f64; 2]],
+    zoom: bool,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    root.fill(&BACKGROUND).map_err(e)?;
+    let (w, h) = root.dim_in_pixel();
+    let (plot, side) = root.split_horizontally(h.min(w));
+    // Square data range over key frames and tracks.
+    let keys_in_view = if zoom { &[][..] } else { key_xy };
+    let pts = keys_in_view
+        .iter()
+        .chain(tracks.iter().flat_map(|t| t.xy.iter()));
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for p in pts {
+        x0 = x0.min(p[0]);
+        x1 = x1.max(p[0]);
+        y0 = y0.min(p[1]);
+        y1 = y1.max(p[1]);
+    }
+    if !x0.is_finite() {
+        (x0, x1, y0, y1) = (-1.0, 1.0, -1.0, 1.0);
+    }
+    let half = 0.52 * (x1 - x0).max(y1 - y0).max(1e-9);
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let white = RGBColor(235, 235, 235);
+    let mut chart = ChartBuilder::on(&plot)
+        .margin(20)
+        .caption(title, ("sans-serif", 17).into_font().color(&white))
+        .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
+        .map_err(e)?;
+    // Key frames: one square each.
+    chart
+        .draw_series(
+            key_xy
+                .iter()
+                .filter(|p| (p[0] - cx).abs() <= half && (p[1] - cy).abs() <= half)
+                .map(|p| {
+                    EmptyElement::at((p[0], p[1]))
+                        + Rectangle::new([(-3, -3), (3, 3)], KEY_COLOUR.filled())
+                }),
+        )
+        .map_err(e)?;
+    // Brightness scale: 95th percentile of all speeds is white.
+    let mut all: Vec<f64> = tracks
+        .iter()
+        .flat_map(|t| t.speed.iter().copied())
+        .collect();
+    let vmax = percentile(&mut all, 0.95).max(1e-9);
+    for (i, t) in tracks.iter().enumerate() {
+        let base = PALETTE[i % PALETTE.len()];
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                t.xy.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
+                base.stroke_width(2),
+            )))
+            .map_err(e)?;
+        chart
+            .draw_series(
+                t.xy.iter().zip(&t.speed).map(|(p, &v)| {
+                    Circle::new((p[0], p[1]), 2, speed_colour(base, v / vmax).filled())
+                }),
+            )
+            .map_err(e)?;
+    }
+    // Legend on the side panel.
+    let font = ("sans-serif", 16).into_font().color(&white);
+    let small = ("sans-serif", 13).into_font().color(&white);
+    let mut y = 40;
+    side.draw(&Text::new("clips", (10, y), font.clone()))
+        .map_err(e)?;
+    y += 30;
+    for (i, t) in tracks.iter().enumerate() {
+        let base = PALETTE[i % PALETTE.len()];
+        side.draw(&Rectangle::new([(10, y), (34, y + 14)], base.filled()))
+            .map_err(e)?;
+        side.draw(&Text::new(t.name.clone(), (44, y), font.clone()))
+            .map_err(e)?;
+        y += 26;
+    }
+    y += 20;
+    side.draw(&Text::new(
+        "grey squares: key frames",
+        (10, y),
+        small.clone(),
+    ))
+    .map_err(e)?;
+    y += 22;
+    side.draw(&Text::new(
+        "dots: frames, brightness =",
+        (10, y),
+        small.clone(),
+    ))
+    .map_err(e)?;
+    y += 18;
+    side.draw(&Text::new(
+        format!("joint angular speed (white ≥ {vmax:.0}°/s)"),
+        (10, y),
+        small.clone(),
+    ))
+    .map_err(e)?;
+    y += 24;
+    for s in 0..=10 {
+        let t = f64::from(s) / 10.0;
+        let c = speed_colour(PALETTE[0], t);
+        side.draw(&Rectangle::new(
+            [(10 + s * 20, y), (30 + s * 20, y + 12)],
+            c.filled(),
+        ))
+        .map_err(e)?;
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}
