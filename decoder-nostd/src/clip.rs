@@ -120,12 +120,16 @@ impl<'a> Clip<'a> {
             if range.start < body_start || range.end > crc_at {
                 return Err(Error::ContainerSectionBounds { id });
             }
-            let slot = seen.get_mut(usize::from(id)).ok_or(Error::ContainerSectionBounds { id })?;
+            let slot = seen
+                .get_mut(usize::from(id))
+                .ok_or(Error::ContainerSectionBounds { id })?;
             if *slot {
                 return Err(Error::ContainerDuplicateSection { id });
             }
             *slot = true;
-            let payload = bytes.get(range).ok_or(Error::ContainerSectionBounds { id })?;
+            let payload = bytes
+                .get(range)
+                .ok_or(Error::ContainerSectionBounds { id })?;
             match id {
                 consts::SECTION_HEADER => header = Some(payload),
                 consts::SECTION_CODEC_INDEX => {

@@ -1,47 +1,66 @@
 //! The `index` codec (SPEC.md §4): low-resolution model-based indexing
 //! after Chattopadhyay, Bhandarkar & Li (2007). Each channel value is a
 //! small index into a table held in the bitstream (so in flash); decoding is
-//! one table look-up per channel, plus an addition in delta frames.
+//! one table look-up per coded channel, plus an addition in delta frames.
+//!
+//! Channels are coded in *groups* that share an index width, a shift and
+//! the accumulate flag, so the inner loop has no per-channel parameters but
+//! a table offset and a base; channels that do not change in delta frames
+//! are simply absent from the delta set and cost nothing there.
 
 use crate::bits::BitReader;
-use crate::consts::index::{DESCRIPTOR_LEN, FLAG_ACCUMULATE, MAX_BITS, MAX_SHIFT, SHIFT_MASK};
+use crate::consts::index::{
+    ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS, MAX_SHIFT, SHIFT_MASK,
+};
 use crate::error::Error;
 use crate::reader::Reader;
 
-/// Flag bits that must be zero in descriptor byte 1.
+/// Flag bits that must be zero in group header byte 1.
 const RESERVED_FLAGS: u8 = !(FLAG_ACCUMULATE | SHIFT_MASK);
 
 /// A validated view of an `index` codec section.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct IndexCodec<'a> {
     key_interval: u32,
-    key_desc: &'a [u8],
-    delta_desc: &'a [u8],
+    key_set: &'a [u8],
+    delta_set: &'a [u8],
     table: &'a [u8],
     payload: &'a [u8],
     key_bits: u64,
     delta_bits: u64,
 }
 
+/// What validating one set (§4.2) yields.
+struct SetInfo<'a> {
+    bytes: &'a [u8],
+    bits: u64,
+    entries: u64,
+}
+
 impl<'a> IndexCodec<'a> {
     /// Validates the section against the header's channel and frame counts.
     pub(crate) fn parse(bytes: &'a [u8], channels: usize, frames: u32) -> Result<Self, Error> {
         let malformed = |rule| Error::IndexMalformed { rule };
+        let short = malformed("section shorter than 8 bytes");
         let mut r = Reader::new(bytes);
-        let key_interval = u32::from(r.u16_le().ok_or(malformed("section shorter than 8 bytes"))?);
-        let count = usize::from(r.u16_le().ok_or(malformed("section shorter than 8 bytes"))?);
-        let table_len = r.u32_le().ok_or(malformed("section shorter than 8 bytes"))?;
+        let key_interval = u32::from(r.u16_le().ok_or(short)?);
+        let count = usize::from(r.u16_le().ok_or(short)?);
+        let table_len = r.u32_le().ok_or(short)?;
         if count != channels {
             return Err(malformed("channel count differs from the header"));
         }
-        let desc_len = channels
-            .checked_mul(DESCRIPTOR_LEN)
-            .ok_or(malformed("descriptor table too large"))?;
-        let key_desc = r.take(desc_len).ok_or(malformed("descriptors truncated"))?;
-        let delta_desc = if key_interval > 0 {
-            r.take(desc_len).ok_or(malformed("delta descriptors truncated"))?
+        let key = check_set(&mut r, channels, table_len, false)?;
+        if key.entries != channels as u64 {
+            return Err(malformed("key set must have one entry per channel"));
+        }
+        let delta = if key_interval > 0 {
+            check_set(&mut r, channels, table_len, true)?
         } else {
-            &[]
+            SetInfo {
+                bytes: &[],
+                bits: 0,
+                entries: 0,
+            }
         };
         let table_bytes = usize::try_from(table_len)
             .ok()
@@ -49,16 +68,14 @@ impl<'a> IndexCodec<'a> {
             .ok_or(malformed("table too large"))?;
         let table = r.take(table_bytes).ok_or(malformed("table truncated"))?;
         let payload = r.rest();
-        let key_bits = check_descriptors(key_desc, table_len, false)?;
-        let delta_bits = check_descriptors(delta_desc, table_len, true)?;
         let codec = IndexCodec {
             key_interval,
-            key_desc,
-            delta_desc,
+            key_set: key.bytes,
+            delta_set: delta.bytes,
             table,
             payload,
-            key_bits,
-            delta_bits,
+            key_bits: key.bits,
+            delta_bits: delta.bits,
         };
         let needed_bits = codec.frame_bit_offset(frames);
         let available_bits = (payload.len() as u64) * 8;
@@ -71,7 +88,7 @@ impl<'a> IndexCodec<'a> {
         Ok(codec)
     }
 
-    /// True when frame `i` is coded with absolute (key) descriptors.
+    /// True when frame `i` is a key frame.
     pub(crate) fn is_key(&self, frame: u32) -> bool {
         self.key_interval == 0 || frame.is_multiple_of(self.key_interval)
     }
@@ -98,61 +115,118 @@ impl<'a> IndexCodec<'a> {
 
     /// Decodes frame `frame` into `state`, which must hold frame `frame - 1`
     /// when `frame` is a delta frame (§4.3).
-    #[inline]
     pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) {
-        let desc = if self.is_key(frame) {
-            self.key_desc
+        let set = if self.is_key(frame) {
+            // A key frame defines every channel from scratch (§4.3).
+            state.fill(0);
+            self.key_set
         } else {
-            self.delta_desc
+            self.delta_set
         };
         let mut bits = BitReader::at(self.payload, self.frame_bit_offset(frame));
-        let table = self.table;
-        for (d, value) in desc.chunks_exact(DESCRIPTOR_LEN).zip(state.iter_mut()) {
-            let Ok(d) = <&[u8; DESCRIPTOR_LEN]>::try_from(d) else {
-                continue;
+        let mut r = Reader::new(set);
+        let groups = r.u16_le().unwrap_or(0);
+        for _ in 0..groups {
+            let Some(&[width, shift_flags, c0, c1]) = r.take(GROUP_HEADER_LEN) else {
+                return;
             };
-            // Bytes 0-3 as one word: width | shift+flags << 8 | table << 16.
-            let word = u32::from_le_bytes([d[0], d[1], d[2], d[3]]);
-            let base = i32::from_le_bytes([d[4], d[5], d[6], d[7]]);
-            let idx = bits.read(word & 0xFF);
-            let at = (((word >> 16) + idx) as usize) * 2;
-            let entry = match table.get(at..at + 2) {
-                Some(&[lo, hi]) => i16::from_le_bytes([lo, hi]),
-                _ => 0,
+            let count = usize::from(u16::from_le_bytes([c0, c1]));
+            let Some(entries) = r.take(count.saturating_mul(ENTRY_LEN)) else {
+                return;
             };
-            let v = base.wrapping_add(i32::from(entry) << ((word >> 8) & u32::from(SHIFT_MASK)));
-            // All ones when the accumulate flag (bit 15 of the word) is set.
-            let keep = ((word << 16) as i32) >> 31;
-            *value = v.wrapping_add(*value & keep);
+            let width = u32::from(width);
+            let shift = u32::from(shift_flags & SHIFT_MASK);
+            // Two copies of the loop so the accumulate test is per group,
+            // not per channel.
+            if shift_flags & FLAG_ACCUMULATE != 0 {
+                decode_group::<true>(entries, self.table, &mut bits, width, shift, state);
+            } else {
+                decode_group::<false>(entries, self.table, &mut bits, width, shift, state);
+            }
         }
     }
 }
 
-/// Checks every descriptor of one set (§4.2) and returns the bits one frame
-/// record of that set needs.
-fn check_descriptors(desc: &[u8], table_len: u32, delta: bool) -> Result<u64, Error> {
-    let mut total = 0u64;
-    for (channel, d) in desc.chunks_exact(DESCRIPTOR_LEN).enumerate() {
-        let bad = Error::IndexDescriptor {
-            channel: channel as u32,
+/// The inner loop: one index, one table look-up, one store per entry.
+#[inline(always)]
+fn decode_group<const ACCUMULATE: bool>(
+    entries: &[u8],
+    table: &[u8],
+    bits: &mut BitReader<'_>,
+    width: u32,
+    shift: u32,
+    state: &mut [i32],
+) {
+    for e in entries.chunks_exact(ENTRY_LEN) {
+        let Ok(e) = <&[u8; ENTRY_LEN]>::try_from(e) else {
+            continue;
         };
-        let [width, shift_flags, o0, o1, ..] = *d else {
-            return Err(bad);
+        // Bytes 0-3 as one word: channel | table offset << 16.
+        let word = u32::from_le_bytes([e[0], e[1], e[2], e[3]]);
+        let base = i32::from_le_bytes([e[4], e[5], e[6], e[7]]);
+        let idx = bits.read(width);
+        let at = (((word >> 16) + idx) as usize) * 2;
+        let entry = match table.get(at..at + 2) {
+            Some(&[lo, hi]) => i16::from_le_bytes([lo, hi]),
+            _ => 0,
         };
-        let shift = shift_flags & SHIFT_MASK;
+        let v = base.wrapping_add(i32::from(entry) << shift);
+        if let Some(s) = state.get_mut((word & 0xFFFF) as usize) {
+            *s = if ACCUMULATE { s.wrapping_add(v) } else { v };
+        }
+    }
+}
+
+/// Checks one set (§4.2) and returns its bytes, the bits one record of it
+/// needs and its number of entries.
+fn check_set<'a>(
+    r: &mut Reader<'a>,
+    channels: usize,
+    table_len: u32,
+    delta: bool,
+) -> Result<SetInfo<'a>, Error> {
+    let start = r.clone();
+    let truncated = Error::IndexMalformed {
+        rule: "set truncated",
+    };
+    let groups = r.u16_le().ok_or(truncated)?;
+    let (mut bits, mut entries, mut len) = (0u64, 0u64, 2usize);
+    for _ in 0..groups {
+        let Some(&[width, shift_flags, c0, c1]) = r.take(GROUP_HEADER_LEN) else {
+            return Err(truncated);
+        };
+        let count = usize::from(u16::from_le_bytes([c0, c1]));
+        let body = r.take(count * ENTRY_LEN).ok_or(truncated)?;
         let accumulate = shift_flags & FLAG_ACCUMULATE != 0;
         if width > MAX_BITS
-            || shift > MAX_SHIFT
+            || shift_flags & SHIFT_MASK > MAX_SHIFT
             || shift_flags & RESERVED_FLAGS != 0
             || (accumulate && !delta)
         {
-            return Err(bad);
+            return Err(Error::IndexMalformed {
+                rule: "invalid group header",
+            });
         }
-        let end = u32::from(u16::from_le_bytes([o0, o1])) + (1u32 << width);
-        if end > table_len {
-            return Err(bad);
+        for e in body.chunks_exact(ENTRY_LEN) {
+            let [ch0, ch1, o0, o1, ..] = *e else {
+                return Err(truncated);
+            };
+            let channel = u16::from_le_bytes([ch0, ch1]);
+            let end = u32::from(u16::from_le_bytes([o0, o1])) + (1u32 << width);
+            if usize::from(channel) >= channels || end > table_len {
+                return Err(Error::IndexDescriptor {
+                    channel: u32::from(channel),
+                });
+            }
         }
-        total += u64::from(width);
+        bits += u64::from(width) * count as u64;
+        entries += count as u64;
+        len += GROUP_HEADER_LEN + body.len();
     }
-    Ok(total)
+    let bytes = start.clone().take(len).ok_or(truncated)?;
+    Ok(SetInfo {
+        bytes,
+        bits,
+        entries,
+    })
 }

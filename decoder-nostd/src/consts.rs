@@ -45,14 +45,16 @@ pub mod unit {
 
 /// Index codec constants, SPEC.md §4.
 pub mod index {
-    /// Bytes of one channel descriptor (§4.2).
-    pub const DESCRIPTOR_LEN: usize = 8;
+    /// Bytes of a group header (§4.2): width, shift+flags, count.
+    pub const GROUP_HEADER_LEN: usize = 4;
+    /// Bytes of one group entry (§4.2): channel, table offset, base.
+    pub const ENTRY_LEN: usize = 8;
     /// Largest index width in bits.
     pub const MAX_BITS: u8 = 12;
     /// Largest table shift.
     pub const MAX_SHIFT: u8 = 24;
-    /// Descriptor flag: add the looked-up value to the previous frame's value.
+    /// Group flag: add the looked-up value to the previous frame's value.
     pub const FLAG_ACCUMULATE: u8 = 0x80;
-    /// Mask of the shift in descriptor byte 1.
+    /// Mask of the shift in group header byte 1.
     pub const SHIFT_MASK: u8 = 0x1F;
 }

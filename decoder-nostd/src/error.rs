@@ -164,7 +164,9 @@ impl fmt::Display for Error {
             Error::ContainerUnknownSection { id } => {
                 write!(f, "unknown critical section {id:#04x}")
             }
-            Error::ContainerMissingSection { id } => write!(f, "required section {id:#04x} missing"),
+            Error::ContainerMissingSection { id } => {
+                write!(f, "required section {id:#04x} missing")
+            }
             Error::ContainerNoCodec => f.write_str("no codec section this decoder supports"),
             Error::ContainerCrcMismatch { stored, computed } => write!(
                 f,
@@ -197,10 +199,9 @@ impl fmt::Display for Error {
                 f,
                 "clip has {channels} channels, player capacity is {capacity}"
             ),
-            Error::PlayerOutputTooSmall { expected, actual } => write!(
-                f,
-                "output slice holds {actual} values, {expected} needed"
-            ),
+            Error::PlayerOutputTooSmall { expected, actual } => {
+                write!(f, "output slice holds {actual} values, {expected} needed")
+            }
             Error::PlayerFrameOutOfRange { frame, frames } => {
                 write!(f, "frame {frame} out of range (clip has {frames})")
             }

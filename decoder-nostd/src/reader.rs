@@ -108,7 +108,10 @@ mod tests {
         assert_eq!(r.varint_u32(), Some(u32::MAX));
         assert!(r.is_empty());
         // Overflowing fifth byte and unterminated varints are rejected.
-        assert_eq!(Reader::new(&[0xFF, 0xFF, 0xFF, 0xFF, 0x1F]).varint_u32(), None);
+        assert_eq!(
+            Reader::new(&[0xFF, 0xFF, 0xFF, 0xFF, 0x1F]).varint_u32(),
+            None
+        );
         assert_eq!(Reader::new(&[0x80, 0x80]).varint_u32(), None);
     }
 

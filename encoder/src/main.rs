@@ -11,7 +11,11 @@ use mocap_encoder::units::LengthUnit;
 use mocap_encoder::{bench, bvh, clipfile, fixed, generate, metrics, units};
 
 #[derive(Parser)]
-#[command(name = "mocap", version, about = "Motion-capture codec for microcontrollers")]
+#[command(
+    name = "mocap",
+    version,
+    about = "Motion-capture codec for microcontrollers"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -131,7 +135,9 @@ impl std::str::FromStr for UnitArg {
         if s == "auto" {
             Ok(UnitArg::Auto)
         } else {
-            s.parse::<LengthUnit>().map(UnitArg::Fixed).map_err(|e| e.to_string())
+            s.parse::<LengthUnit>()
+                .map(UnitArg::Fixed)
+                .map_err(|e| e.to_string())
         }
     }
 }
@@ -158,7 +164,12 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
 fn emit_source(kind: Emit, output: &Path, bytes: &[u8]) -> Result<PathBuf, String> {
     let body: Vec<String> = bytes
         .chunks(16)
-        .map(|c| c.iter().map(|b| format!("0x{b:02x},")).collect::<Vec<_>>().join(" "))
+        .map(|c| {
+            c.iter()
+                .map(|b| format!("0x{b:02x},"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
         .collect();
     let (ext, text) = match kind {
         Emit::Rust => (
@@ -234,7 +245,11 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             Ok(())
         }
-        Command::Decode { input, output, text } => {
+        Command::Decode {
+            input,
+            output,
+            text,
+        } => {
             let bytes = read_clip(&input)?;
             let clip = parse_clip(&input, &bytes)?;
             if text {
@@ -279,10 +294,18 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             let frames = clipfile::decode_all(&clip).map_err(|e| e.to_string())?;
             let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
-            let file_bytes = std::fs::metadata(&input).map(|x| x.len() as usize).unwrap_or(0);
+            let file_bytes = std::fs::metadata(&input)
+                .map(|x| x.len() as usize)
+                .unwrap_or(0);
             let x = metrics::compare(&m, &back, unit.metres(), None, bytes.len(), file_bytes);
             if let Some(p) = plot {
-                mocap_encoder::plot::frame_error_plot(&p, &m, &back, unit.metres(), &clip_path.display().to_string())?;
+                mocap_encoder::plot::frame_error_plot(
+                    &p,
+                    &m,
+                    &back,
+                    unit.metres(),
+                    &clip_path.display().to_string(),
+                )?;
                 eprintln!("wrote {}", p.display());
             }
             if json {
@@ -297,7 +320,10 @@ fn run(cli: Cli) -> Result<(), String> {
                     x.max_joint_err_mm, x.max_joint_err_joint, x.max_joint_err_frame
                 );
                 println!("distortion d     {:.3} %", x.distortion_pct);
-                println!("angle RMS / max  {:.4}° / {:.4}°", x.angle_rms_deg, x.angle_max_deg);
+                println!(
+                    "angle RMS / max  {:.4}° / {:.4}°",
+                    x.angle_rms_deg, x.angle_max_deg
+                );
                 println!("frames×channels  {}×{}", x.frames, x.channels);
             }
             Ok(())
@@ -315,7 +341,12 @@ fn run(cli: Cli) -> Result<(), String> {
             let rows = bench::run(&paths, &specs, &max_error)?;
             print!("{}", bench::markdown(&rows));
             if let Some(p) = json {
-                write(&p, serde_json::to_string_pretty(&rows).map_err(|e| e.to_string())?.as_bytes())?;
+                write(
+                    &p,
+                    serde_json::to_string_pretty(&rows)
+                        .map_err(|e| e.to_string())?
+                        .as_bytes(),
+                )?;
             }
             if let Some(p) = plot {
                 mocap_encoder::plot::rate_distortion_plot(&p, &rows)?;
@@ -352,28 +383,31 @@ fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
         s += &format!("section {:#04x}: {} bytes\n", sec.id, sec.bytes.len());
         if sec.id == mocap_decoder::consts::SECTION_CODEC_INDEX {
             if let Some(info) = index::inspect(sec.bytes) {
-                let n = info.channels.len().max(1);
-                let key: u32 = info.channels.iter().map(|c| u32::from(c.key_bits)).sum();
-                let delta: u32 = info.channels.iter().map(|c| u32::from(c.delta_bits)).sum();
-                let constant = info.channels.iter().filter(|c| c.key_bits == 0 && c.delta_bits == 0).count();
-                let deltas = info.channels.iter().filter(|c| c.accumulate).count();
+                let chans = info.per_channel(h.channel_count());
+                let n = chans.len().max(1);
+                let key: u32 = chans.iter().map(|c| u32::from(c.key_bits)).sum();
+                let delta: u32 = chans.iter().map(|c| u32::from(c.delta_bits.unwrap_or(0))).sum();
+                let unchanged = chans.iter().filter(|c| c.delta_bits.is_none()).count();
+                let deltas = chans.iter().filter(|c| c.accumulate).count();
                 s += &format!(
-                    "  index codec: key interval {}, table {} entries, payload {} bytes\n  bits per frame: key {key} ({:.2}/channel), delta {delta} ({:.2}/channel)\n  channels: {constant} constant, {deltas} delta-coded, {} absolute\n",
+                    "  index codec: key interval {}, table {} entries, payload {} bytes, {} key groups, {} delta groups\n  bits per frame: key {key} ({:.2}/channel), delta {delta} ({:.2}/channel)\n  channels: {unchanged} unchanged between key frames, {deltas} delta-coded, {} absolute\n",
                     info.key_interval,
                     info.table_entries,
                     info.payload_bytes,
+                    info.key.len(),
+                    info.delta.len(),
                     key as f64 / n as f64,
                     delta as f64 / n as f64,
-                    n - constant - deltas
+                    n - unchanged - deltas
                 );
                 if list_channels {
-                    for (c, (ch, d)) in h.channels().zip(&info.channels).enumerate() {
+                    for (c, (ch, d)) in h.channels().zip(&chans).enumerate() {
                         s += &format!(
-                            "  {c:4} {}.{:<10} key {:2} bits, delta {:2} bits{} range [{}, {}]\n",
+                            "  {c:4} {}.{:<10} key {:2} bits, delta {} bits{} range [{}, {}]\n",
                             ch.joint_name,
                             ch.kind.name(),
                             d.key_bits,
-                            d.delta_bits,
+                            d.delta_bits.map_or("-".to_string(), |b| format!("{b:2}")),
                             if d.accumulate { " (acc)" } else { "" },
                             ch.min,
                             ch.max

@@ -12,7 +12,9 @@ fn play(bytes: &[u8]) {
     let Ok(clip) = Clip::parse(bytes) else { return };
     let _ = clip.header().joints().count();
     let _ = clip.header().channels().count();
-    let Ok(mut player) = Player::<512>::new(&clip) else { return };
+    let Ok(mut player) = Player::<512>::new(&clip) else {
+        return;
+    };
     let mut out = [0i32; 512];
     while let Ok(Some(_)) = player.next_frame(&mut out) {}
     let n = player.frame_count();
@@ -39,7 +41,11 @@ fn crc32(bytes: &[u8]) -> u32 {
     for &b in bytes {
         crc ^= u32::from(b);
         for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
         }
     }
     !crc

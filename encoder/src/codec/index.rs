@@ -4,7 +4,7 @@
 //! frames every K frames. The encoder simulates the decoder exactly (closed
 //! loop), so delta errors never accumulate past the tolerance.
 
-use mocap_decoder::consts::index::{DESCRIPTOR_LEN, FLAG_ACCUMULATE, MAX_BITS};
+use mocap_decoder::consts::index::{ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS};
 
 use super::quantizer::{self, Codebook};
 
@@ -33,14 +33,17 @@ struct Candidate {
 }
 
 fn is_key(frame: usize, k: usize) -> bool {
-    k == 0 || frame % k == 0
+    k == 0 || frame.is_multiple_of(k)
 }
 
 /// Absolute coding of every frame.
 fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
     let cb = quantizer::fit(x, tol, MAX_BITS)?;
     let indices: Vec<u16> = x.iter().map(|&v| cb.nearest(v) as u16).collect();
-    let decoded = indices.iter().map(|&i| cb.value(usize::from(i)) as i32).collect();
+    let decoded = indices
+        .iter()
+        .map(|&i| cb.value(usize::from(i)) as i32)
+        .collect();
     let bits = x.len() as u64 * u64::from(cb.bits) + table_bits(&cb);
     Some(Candidate {
         code: ChannelCode {
@@ -54,15 +57,23 @@ fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
 }
 
 fn table_bits(cb: &Codebook) -> u64 {
-    16 * cb.entries.len() as u64 + 8 * DESCRIPTOR_LEN as u64
+    16 * cb.entries.len() as u64 + 8 * ENTRY_LEN as u64
 }
 
 /// Delta coding with key frames every `k`; tries delta codebooks of
 /// growing size and keeps the first whose closed loop meets `tol`.
 fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8) -> Option<Candidate> {
-    let keys: Vec<i64> = x.iter().enumerate().filter(|(f, _)| is_key(*f, k)).map(|(_, &v)| v).collect();
+    let keys: Vec<i64> = x
+        .iter()
+        .enumerate()
+        .filter(|(f, _)| is_key(*f, k))
+        .map(|(_, &v)| v)
+        .collect();
     let key_cb = quantizer::fit(&keys, tol, MAX_BITS)?;
-    let steps: Vec<i64> = (1..x.len()).filter(|&f| !is_key(f, k)).map(|f| x[f] - x[f - 1]).collect();
+    let steps: Vec<i64> = (1..x.len())
+        .filter(|&f| !is_key(f, k))
+        .map(|f| x[f] - x[f - 1])
+        .collect();
     if steps.is_empty() {
         return None;
     }
@@ -80,7 +91,13 @@ fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8) -> Option<Candidate> {
     None
 }
 
-fn closed_loop(x: &[i64], tol: i64, k: usize, key_cb: &Codebook, cb: &Codebook) -> Option<Candidate> {
+fn closed_loop(
+    x: &[i64],
+    tol: i64,
+    k: usize,
+    key_cb: &Codebook,
+    cb: &Codebook,
+) -> Option<Candidate> {
     let mut indices = Vec::with_capacity(x.len());
     let mut decoded = Vec::with_capacity(x.len());
     let mut prev: i32 = 0;
@@ -101,7 +118,8 @@ fn closed_loop(x: &[i64], tol: i64, k: usize, key_cb: &Codebook, cb: &Codebook) 
     }
     let nk = (0..x.len()).filter(|&f| is_key(f, k)).count() as u64;
     let nd = x.len() as u64 - nk;
-    let bits = nk * u64::from(key_cb.bits) + nd * u64::from(cb.bits) + table_bits(key_cb) + table_bits(cb);
+    let bits =
+        nk * u64::from(key_cb.bits) + nd * u64::from(cb.bits) + table_bits(key_cb) + table_bits(cb);
     Some(Candidate {
         code: ChannelCode {
             key: key_cb.clone(),
@@ -145,19 +163,33 @@ pub struct ToleranceTooTight {
 /// Codes every channel (`x[channel][frame]`) within `tol[channel]` (same
 /// units), trying each key interval of `intervals` and keeping the
 /// smallest section.
-pub fn encode(x: &[Vec<i32>], tol: &[i64], intervals: &[u16]) -> Result<IndexEncoding, ToleranceTooTight> {
-    let wide: Vec<Vec<i64>> = x.iter().map(|c| c.iter().map(|&v| i64::from(v)).collect()).collect();
+pub fn encode(
+    x: &[Vec<i32>],
+    tol: &[i64],
+    intervals: &[u16],
+) -> Result<IndexEncoding, ToleranceTooTight> {
+    let wide: Vec<Vec<i64>> = x
+        .iter()
+        .map(|c| c.iter().map(|&v| i64::from(v)).collect())
+        .collect();
     let mut best: Option<(u64, IndexEncoding)> = None;
     for &k in intervals {
         let mut total = 0u64;
         let mut channels = Vec::with_capacity(x.len());
         for (c, series) in wide.iter().enumerate() {
-            let cand = code_channel(series, tol[c].max(0), usize::from(k)).ok_or(ToleranceTooTight { channel: c })?;
+            let cand = code_channel(series, tol[c].max(0), usize::from(k))
+                .ok_or(ToleranceTooTight { channel: c })?;
             total += cand.bits;
             channels.push(cand.code);
         }
         if best.as_ref().is_none_or(|(b, _)| total < *b) {
-            best = Some((total, IndexEncoding { key_interval: k, channels }));
+            best = Some((
+                total,
+                IndexEncoding {
+                    key_interval: k,
+                    channels,
+                },
+            ));
         }
     }
     Ok(best.map(|(_, e)| e).unwrap_or(IndexEncoding {
@@ -188,11 +220,55 @@ impl Pool {
     }
 }
 
-fn descriptor(cb: &Codebook, off: u16, accumulate: bool) -> [u8; DESCRIPTOR_LEN] {
-    let [o0, o1] = off.to_le_bytes();
-    let [b0, b1, b2, b3] = cb.base.to_le_bytes();
-    let flags = if accumulate { FLAG_ACCUMULATE } else { 0 };
-    [cb.bits, cb.shift | flags, o0, o1, b0, b1, b2, b3]
+/// One coded channel of a set (SPEC.md §4.2).
+#[derive(Clone, Copy)]
+struct Entry {
+    channel: u16,
+    bits: u8,
+    shift: u8,
+    accumulate: bool,
+    table: u16,
+    base: i32,
+}
+
+/// Groups entries by (width, shift, accumulate) in a stable order and
+/// returns the set's bytes and the entries in record order.
+fn write_set(entries: &[Entry]) -> (Vec<u8>, Vec<Entry>) {
+    let mut order: Vec<Entry> = entries.to_vec();
+    order.sort_by_key(|e| (e.bits, e.shift, e.accumulate, e.channel));
+    let mut out = Vec::new();
+    let mut groups = 0u16;
+    out.extend_from_slice(&[0, 0]);
+    for run in order.chunk_by(|a, b| (a.bits, a.shift, a.accumulate) == (b.bits, b.shift, b.accumulate)) {
+        for chunk in run.chunks(usize::from(u16::MAX)) {
+            let e0 = chunk[0];
+            let flags = if e0.accumulate { FLAG_ACCUMULATE } else { 0 };
+            let mut header = [0u8; GROUP_HEADER_LEN];
+            header[0] = e0.bits;
+            header[1] = e0.shift | flags;
+            header[2..4].copy_from_slice(&(chunk.len() as u16).to_le_bytes());
+            out.extend_from_slice(&header);
+            for e in chunk {
+                out.extend_from_slice(&e.channel.to_le_bytes());
+                out.extend_from_slice(&e.table.to_le_bytes());
+                out.extend_from_slice(&e.base.to_le_bytes());
+            }
+            groups += 1;
+        }
+    }
+    out[0..2].copy_from_slice(&groups.to_le_bytes());
+    (out, order)
+}
+
+fn entry(channel: usize, cb: &Codebook, table: u16, accumulate: bool) -> Entry {
+    Entry {
+        channel: channel as u16,
+        bits: cb.bits,
+        shift: cb.shift,
+        accumulate,
+        table,
+        base: cb.base,
+    }
 }
 
 /// Little-endian, LSB-first bit writer (SPEC.md §4.4).
@@ -206,7 +282,7 @@ impl BitWriter {
     /// Appends the low `n` bits of `v`.
     pub fn write(&mut self, v: u32, n: u8) {
         for i in 0..n {
-            if self.bit % 8 == 0 {
+            if self.bit.is_multiple_of(8) {
                 self.bytes.push(0);
             }
             if (v >> i) & 1 != 0 {
@@ -226,26 +302,30 @@ impl IndexEncoding {
     /// The codec section bytes (SPEC.md §4.1). Fails if the table pool
     /// exceeds the 16-bit offsets of the format.
     pub fn to_section(&self) -> Result<Vec<u8>, String> {
-        let mut pool = Pool { entries: Vec::new() };
-        let mut key_desc = Vec::new();
-        let mut delta_desc = Vec::new();
-        let mut placed = Vec::new();
-        for ch in &self.channels {
-            let key_off = pool.place(&ch.key);
-            let delta_off = ch.delta.as_ref().map(|d| pool.place(d));
-            placed.push((key_off, delta_off));
-        }
-        for (ch, &(key_off, delta_off)) in self.channels.iter().zip(&placed) {
+        let mut pool = Pool {
+            entries: Vec::new(),
+        };
+        let placed: Vec<(u16, Option<u16>)> = self
+            .channels
+            .iter()
+            .map(|ch| (pool.place(&ch.key), ch.delta.as_ref().map(|d| pool.place(d))))
+            .collect();
+        let mut key = Vec::new();
+        let mut delta = Vec::new();
+        for (c, (ch, &(key_off, delta_off))) in self.channels.iter().zip(&placed).enumerate() {
             pool.pad_for(key_off, ch.key.bits);
-            key_desc.extend_from_slice(&descriptor(&ch.key, key_off, false));
-            if self.key_interval > 0 {
-                match (&ch.delta, delta_off) {
-                    (Some(d), Some(off)) => {
-                        pool.pad_for(off, d.bits);
-                        delta_desc.extend_from_slice(&descriptor(d, off, true));
+            key.push(entry(c, &ch.key, key_off, false));
+            match (&ch.delta, delta_off) {
+                (Some(d), Some(off)) => {
+                    pool.pad_for(off, d.bits);
+                    // A delta codebook of one zero step never changes the value.
+                    if d.bits > 0 || d.value(0) != 0 {
+                        delta.push(entry(c, d, off, true));
                     }
-                    _ => delta_desc.extend_from_slice(&descriptor(&ch.key, key_off, false)),
                 }
+                // Absolute channels: constant ones keep the key frame's value.
+                _ if ch.key.bits > 0 => delta.push(entry(c, &ch.key, key_off, false)),
+                _ => {}
             }
         }
         if pool.entries.len() > usize::from(u16::MAX) {
@@ -254,24 +334,25 @@ impl IndexEncoding {
                 pool.entries.len()
             ));
         }
+        let (key_bytes, key_order) = write_set(&key);
+        let (delta_bytes, delta_order) = write_set(&delta);
         let frames = self.channels.first().map_or(0, |c| c.indices.len());
         let mut bits = BitWriter::default();
         for f in 0..frames {
-            let key = self.key_interval == 0 || f % usize::from(self.key_interval) == 0;
-            for ch in &self.channels {
-                let width = match (&ch.delta, key) {
-                    (Some(d), false) => d.bits,
-                    _ => ch.key.bits,
-                };
-                bits.write(u32::from(ch.indices[f]), width);
+            let is_key = self.key_interval == 0 || f % usize::from(self.key_interval) == 0;
+            let order = if is_key { &key_order } else { &delta_order };
+            for e in order {
+                bits.write(u32::from(self.channels[usize::from(e.channel)].indices[f]), e.bits);
             }
         }
         let mut out = Vec::new();
         out.extend_from_slice(&self.key_interval.to_le_bytes());
         out.extend_from_slice(&(self.channels.len() as u16).to_le_bytes());
         out.extend_from_slice(&(pool.entries.len() as u32).to_le_bytes());
-        out.extend_from_slice(&key_desc);
-        out.extend_from_slice(&delta_desc);
+        out.extend_from_slice(&key_bytes);
+        if self.key_interval > 0 {
+            out.extend_from_slice(&delta_bytes);
+        }
         for e in &pool.entries {
             out.extend_from_slice(&e.to_le_bytes());
         }
@@ -285,15 +366,15 @@ impl IndexEncoding {
     }
 }
 
-/// One channel's parameters as stored in a section (for `mocap info`).
+/// One group of a set (for `mocap info`).
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct DescriptorInfo {
-    /// Bits per key-frame index.
-    pub key_bits: u8,
-    /// Bits per delta-frame index (equal to `key_bits` for absolute channels).
-    pub delta_bits: u8,
-    /// True if delta frames accumulate.
+pub struct GroupInfo {
+    /// Index width.
+    pub bits: u8,
+    /// Accumulating (delta) group.
     pub accumulate: bool,
+    /// Channels of the group.
+    pub channels: Vec<u16>,
 }
 
 /// What `mocap info` shows of an index section.
@@ -303,39 +384,100 @@ pub struct SectionInfo {
     pub key_interval: u16,
     /// Entries in the table pool.
     pub table_entries: u32,
-    /// Per channel.
-    pub channels: Vec<DescriptorInfo>,
+    /// Groups of the key set.
+    pub key: Vec<GroupInfo>,
+    /// Groups of the delta set.
+    pub delta: Vec<GroupInfo>,
     /// Payload bytes.
     pub payload_bytes: usize,
 }
 
-/// Reads the descriptors of an index section that the decoder validated.
+fn read_set(s: &[u8], at: &mut usize) -> Option<Vec<GroupInfo>> {
+    let n = u16::from_le_bytes(s.get(*at..*at + 2)?.try_into().ok()?);
+    *at += 2;
+    let mut groups = Vec::new();
+    for _ in 0..n {
+        let h = s.get(*at..*at + GROUP_HEADER_LEN)?;
+        let count = usize::from(u16::from_le_bytes([h[2], h[3]]));
+        *at += GROUP_HEADER_LEN;
+        let body = s.get(*at..*at + count * ENTRY_LEN)?;
+        *at += count * ENTRY_LEN;
+        groups.push(GroupInfo {
+            bits: h[0],
+            accumulate: h[1] & FLAG_ACCUMULATE != 0,
+            channels: body
+                .chunks_exact(ENTRY_LEN)
+                .map(|e| u16::from_le_bytes([e[0], e[1]]))
+                .collect(),
+        });
+    }
+    Some(groups)
+}
+
+/// Reads the sets of an index section that the decoder validated.
 pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
     let key_interval = u16::from_le_bytes(section.get(0..2)?.try_into().ok()?);
-    let n = usize::from(u16::from_le_bytes(section.get(2..4)?.try_into().ok()?));
     let table_entries = u32::from_le_bytes(section.get(4..8)?.try_into().ok()?);
-    let key = section.get(8..8 + n * DESCRIPTOR_LEN)?;
-    let delta_at = 8 + n * DESCRIPTOR_LEN;
+    let mut at = 8;
+    let key = read_set(section, &mut at)?;
     let delta = if key_interval > 0 {
-        section.get(delta_at..delta_at + n * DESCRIPTOR_LEN)?
+        read_set(section, &mut at)?
     } else {
-        key
+        Vec::new()
     };
-    let desc_end = if key_interval > 0 { delta_at + n * DESCRIPTOR_LEN } else { delta_at };
-    let payload_at = desc_end + 2 * table_entries as usize;
-    let channels = key
-        .chunks_exact(DESCRIPTOR_LEN)
-        .zip(delta.chunks_exact(DESCRIPTOR_LEN))
-        .map(|(k, d)| DescriptorInfo {
-            key_bits: k[0],
-            delta_bits: d[0],
-            accumulate: d[1] & FLAG_ACCUMULATE != 0,
-        })
-        .collect();
+    let payload_at = at + 2 * table_entries as usize;
     Some(SectionInfo {
         key_interval,
         table_entries,
-        channels,
+        key,
+        delta,
         payload_bytes: section.len().saturating_sub(payload_at),
     })
+}
+
+/// One channel's coding as stored in a section (for `mocap info`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DescriptorInfo {
+    /// Bits per key-frame index.
+    pub key_bits: u8,
+    /// Bits per delta-frame index; `None` when delta frames leave the
+    /// channel unchanged (it is absent from the delta set).
+    pub delta_bits: Option<u8>,
+    /// True if delta frames accumulate.
+    pub accumulate: bool,
+}
+
+impl SectionInfo {
+    /// Per channel (`n` channels): how key and delta frames code it.
+    pub fn per_channel(&self, n: usize) -> Vec<DescriptorInfo> {
+        let mut out = vec![
+            DescriptorInfo {
+                key_bits: 0,
+                delta_bits: None,
+                accumulate: false,
+            };
+            n
+        ];
+        for g in &self.key {
+            for &c in &g.channels {
+                if let Some(d) = out.get_mut(usize::from(c)) {
+                    d.key_bits = g.bits;
+                }
+            }
+        }
+        for g in &self.delta {
+            for &c in &g.channels {
+                if let Some(d) = out.get_mut(usize::from(c)) {
+                    d.delta_bits = Some(g.bits);
+                    d.accumulate = g.accumulate;
+                }
+            }
+        }
+        if self.key_interval == 0 {
+            for d in &mut out {
+                d.delta_bits = Some(d.key_bits);
+            }
+        }
+        out
+    }
 }

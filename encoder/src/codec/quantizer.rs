@@ -21,7 +21,10 @@ impl Codebook {
     /// The value code `i` decodes to (SPEC.md §4.3), as the decoder
     /// computes it.
     pub fn value(&self, i: usize) -> i64 {
-        i64::from(self.base.wrapping_add(i32::from(self.entries[i]) << self.shift))
+        i64::from(
+            self.base
+                .wrapping_add(i32::from(self.entries[i]) << self.shift),
+        )
     }
 
     /// The index of the code value nearest to `x`.
@@ -118,7 +121,11 @@ fn lloyd(points: &[i64], mut centres: Vec<i64>, rounds: usize) -> Vec<i64> {
 
 fn build(centres: &[i64], lo: i64, hi: i64, bits: u8) -> Codebook {
     let base = lo + (hi - lo) / 2;
-    let shift = shift_for(lo.min(centres[0]), hi.max(*centres.last().unwrap_or(&hi)), base);
+    let shift = shift_for(
+        lo.min(centres[0]),
+        hi.max(*centres.last().unwrap_or(&hi)),
+        base,
+    );
     let mut entries: Vec<i16> = centres
         .iter()
         .map(|&c| {
