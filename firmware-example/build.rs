@@ -17,7 +17,11 @@ const BOARDS: &[(&str, &str, &[&str])] = &[
         "../memory.x",
         &["thumbv7m-none-eabi", "thumbv6m-none-eabi"],
     ),
-    ("board-microbit", "memory/microbit.x", &["thumbv6m-none-eabi"]),
+    (
+        "board-microbit",
+        "memory/microbit.x",
+        &["thumbv6m-none-eabi"],
+    ),
     (
         "board-mps2-an386",
         "memory/mps2-an386.x",
@@ -42,14 +46,12 @@ fn fail(msg: &str) -> ! {
 }
 
 fn feature_env(feature: &str) -> String {
-    format!(
-        "CARGO_FEATURE_{}",
-        feature.to_uppercase().replace('-', "_")
-    )
+    format!("CARGO_FEATURE_{}", feature.to_uppercase().replace('-', "_"))
 }
 
 fn main() {
-    let manifest_dir = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    let manifest_dir =
+        PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     let target = env::var("TARGET").unwrap_or_default();
 
@@ -102,11 +104,19 @@ fn main() {
 }
 
 fn copy_or_fail(from: &Path, to: &Path, what: &str) {
-    let bytes = fs::read(from)
-        .unwrap_or_else(|e| fail(&format!("mocap-firmware: cannot read {what} {}: {e}", from.display())));
+    let bytes = fs::read(from).unwrap_or_else(|e| {
+        fail(&format!(
+            "mocap-firmware: cannot read {what} {}: {e}",
+            from.display()
+        ))
+    });
     // Rewrite only on change: an unchanged copy keeps the firmware from recompiling.
     if fs::read(to).ok().as_deref() != Some(bytes.as_slice()) {
-        fs::write(to, &bytes)
-            .unwrap_or_else(|e| fail(&format!("mocap-firmware: cannot write {}: {e}", to.display())));
+        fs::write(to, &bytes).unwrap_or_else(|e| {
+            fail(&format!(
+                "mocap-firmware: cannot write {}: {e}",
+                to.display()
+            ))
+        });
     }
 }

@@ -15,6 +15,14 @@ mocap_toolchain_summary >&2
 export MOCAP_CORPUS="${MOCAP_CORPUS:-$(pwd)/../shared/data}"
 [ -d "$MOCAP_CORPUS" ] || echo "SKIPPED: corpus not found at $MOCAP_CORPUS: corpus tests will be skipped" >&2
 
-# The decoder must build for every Cortex-M target on its own too (no_std,
-# no allocation), not only inside the firmware.
-cargo test --release --workspace
+log="$(mktemp)"
+trap 'rm -f "$log"' EXIT
+set +e
+cargo test --release --workspace 2>&1 | tee "$log"
+status=${PIPESTATUS[0]}
+set -e
+grep -h '^SKIPPED' "$log" | sort -u || true
+# One closing line for the whole run, summed over every test binary.
+awk '/^test result:/ { for (i = 1; i <= NF; i++) { if ($(i+1) ~ /^passed/) p += $i; if ($(i+1) ~ /^failed/) f += $i; if ($(i+1) ~ /^ignored/) s += $i } }
+     END { printf "%d passed, %d failed, %d skipped\n", p, f, s }' "$log"
+exit "$status"

@@ -57,13 +57,19 @@ fn group_of(p: &Path) -> String {
 }
 
 /// Runs the bench; progress goes to stderr.
-pub fn run(paths: &[PathBuf], bounds: &[BoundSpec], bound_names: &[String]) -> Result<Vec<Row>, String> {
+pub fn run(
+    paths: &[PathBuf],
+    bounds: &[BoundSpec],
+    bound_names: &[String],
+) -> Result<Vec<Row>, String> {
     let files = expand(paths)?;
     let mut rows = Vec::new();
     for file in &files {
         let m = bvh::read_file(file).map_err(|e| e.to_string())?;
         let unit = units::detect(&m);
-        let file_bytes = std::fs::metadata(file).map(|md| md.len() as usize).unwrap_or(0);
+        let file_bytes = std::fs::metadata(file)
+            .map(|md| md.len() as usize)
+            .unwrap_or(0);
         for (spec, name) in bounds.iter().zip(bound_names) {
             let opts = EncodeOptions {
                 codec: CodecChoice::Index,
@@ -83,7 +89,10 @@ pub fn run(paths: &[PathBuf], bounds: &[BoundSpec], bound_names: &[String]) -> R
             );
             rows.push(Row {
                 group: group_of(file),
-                file: file.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+                file: file
+                    .file_name()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
                 bound: name.clone(),
                 f32_bytes: m.frames() * m.channels() * 4,
                 file_bytes,
@@ -110,16 +119,28 @@ pub fn markdown(rows: &[Row]) -> String {
         );
     }
     s += "\n| folder | bound | files | total f32 bytes | total clip bytes | aggregate ratio | worst angle max ° | worst joint max mm | encode s |\n|---|---|---|---|---|---|---|---|---|\n";
-    let mut keys: Vec<(String, String)> = rows.iter().map(|r| (r.group.clone(), r.bound.clone())).collect();
+    let mut keys: Vec<(String, String)> = rows
+        .iter()
+        .map(|r| (r.group.clone(), r.bound.clone()))
+        .collect();
     keys.dedup();
     keys.sort();
     keys.dedup();
     for (g, b) in keys {
-        let sel: Vec<&Row> = rows.iter().filter(|r| r.group == g && r.bound == b).collect();
+        let sel: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.group == g && r.bound == b)
+            .collect();
         let f32b: usize = sel.iter().map(|r| r.f32_bytes).sum();
         let clip: usize = sel.iter().map(|r| r.metrics.bytes).sum();
-        let amax = sel.iter().map(|r| r.metrics.angle_max_deg).fold(0.0, f64::max);
-        let jmax = sel.iter().map(|r| r.metrics.max_joint_err_mm).fold(0.0, f64::max);
+        let amax = sel
+            .iter()
+            .map(|r| r.metrics.angle_max_deg)
+            .fold(0.0, f64::max);
+        let jmax = sel
+            .iter()
+            .map(|r| r.metrics.max_joint_err_mm)
+            .fold(0.0, f64::max);
         let secs: f64 = sel.iter().map(|r| r.encode_seconds).sum();
         s += &format!(
             "| {g} | {b} | {} | {f32b} | {clip} | {:.2} | {amax:.3} | {jmax:.1} | {secs:.2} |\n",

@@ -46,7 +46,9 @@ impl FromStr for BoundSpec {
             "deg" | "°" => Ok(BoundSpec::Degrees(v)),
             "mm" => Ok(BoundSpec::Millimetres(v)),
             "cm" => Ok(BoundSpec::Millimetres(v * 10.0)),
-            _ => Err(format!("error bound '{s}': unit '{unit}' is not deg, mm or cm")),
+            _ => Err(format!(
+                "error bound '{s}': unit '{unit}' is not deg, mm or cm"
+            )),
         }
     }
 }
@@ -86,8 +88,7 @@ impl Bound {
     pub fn holds(&self, m: &Metrics) -> bool {
         self.angle_deg.is_none_or(|d| m.angle_max_deg <= d)
             && self.position_mm.is_none_or(|p| m.max_joint_err_mm <= p)
-            && (self.position_mm.is_some()
-                || m.position_max_mm <= Self::DEFAULT_TRANSLATION_MM)
+            && (self.position_mm.is_some() || m.position_max_mm <= Self::DEFAULT_TRANSLATION_MM)
     }
 }
 
@@ -145,7 +146,12 @@ fn tolerances(
     s_um: Option<f64>,
     tighten: f64,
 ) -> Vec<i64> {
-    let joint_of: Vec<usize> = m.skeleton.channel_list().into_iter().map(|(j, _)| j).collect();
+    let joint_of: Vec<usize> = m
+        .skeleton
+        .channel_list()
+        .into_iter()
+        .map(|(j, _)| j)
+        .collect();
     fixed
         .kinds
         .iter()
@@ -214,7 +220,8 @@ fn attempt(
         (consts::SECTION_CODEC_INDEX, enc.to_section()?),
     ]);
     // Prove it with the real decoder.
-    let clip = Clip::parse(&bytes).map_err(|e| format!("internal error: own clip rejected: {e}"))?;
+    let clip =
+        Clip::parse(&bytes).map_err(|e| format!("internal error: own clip rejected: {e}"))?;
     let frames = clipfile::decode_all(&clip).map_err(|e| format!("internal error: {e}"))?;
     let n = fixed.kinds.len();
     for (c, ch) in decoded.values.iter().enumerate() {
@@ -227,7 +234,14 @@ fn attempt(
         }
     }
     let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, opts.metres_per_unit);
-    let metrics = metrics::compare(m, &back, opts.metres_per_unit, Some(original_mm), bytes.len(), 0);
+    let metrics = metrics::compare(
+        m,
+        &back,
+        opts.metres_per_unit,
+        Some(original_mm),
+        bytes.len(),
+        0,
+    );
     Ok(Attempt {
         bytes,
         metrics,
@@ -241,7 +255,10 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
         return Err("the motion has no frames or no channels".into());
     }
     if m.channels() > usize::from(u16::MAX) {
-        return Err(format!("{} channels exceed the format's 65535", m.channels()));
+        return Err(format!(
+            "{} channels exceed the format's 65535",
+            m.channels()
+        ));
     }
     let fixed = fixed::to_fixed(m, opts.metres_per_unit);
     let original_mm = metrics::positions_mm(m, opts.metres_per_unit);
@@ -263,7 +280,10 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
                 break a;
             }
             if attempts >= 8 {
-                return Err(format!("could not meet the bound {} after {attempts} attempts", opts.bound));
+                return Err(format!(
+                    "could not meet the bound {} after {attempts} attempts",
+                    opts.bound
+                ));
             }
             tighten *= 0.8;
         },

@@ -95,13 +95,22 @@ pub fn compare(
     // ‖A − E(A)‖ with E(A) the per-coordinate mean over frames.
     let mut spread = 0.0;
     for j in 0..joints {
+        #[allow(clippy::needless_range_loop)] // k indexes both the mean and the points
         for k in 0..3 {
-            let mean = (0..frames).map(|f| a[f * joints + j][k]).sum::<f64>() / frames.max(1) as f64;
-            spread += (0..frames).map(|f| (a[f * joints + j][k] - mean).powi(2)).sum::<f64>();
+            let mean =
+                (0..frames).map(|f| a[f * joints + j][k]).sum::<f64>() / frames.max(1) as f64;
+            spread += (0..frames)
+                .map(|f| (a[f * joints + j][k] - mean).powi(2))
+                .sum::<f64>();
         }
     }
 
-    let kinds: Vec<_> = original.skeleton.channel_list().into_iter().map(|(_, k)| k).collect();
+    let kinds: Vec<_> = original
+        .skeleton
+        .channel_list()
+        .into_iter()
+        .map(|(_, k)| k)
+        .collect();
     let (mut ang_sq, mut ang_n, mut ang_max, mut pos_max) = (0.0, 0usize, 0.0f64, 0.0f64);
     for f in 0..frames {
         let (x, y) = (original.frame(f), decoded.frame(f));

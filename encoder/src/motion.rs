@@ -75,12 +75,7 @@ impl Motion {
 
     /// Number of frames.
     pub fn frames(&self) -> usize {
-        let c = self.channels();
-        if c == 0 {
-            0
-        } else {
-            self.values.len() / c
-        }
+        self.values.len().checked_div(self.channels()).unwrap_or(0)
     }
 
     /// One frame's values.

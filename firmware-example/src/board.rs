@@ -54,7 +54,7 @@ mod imp {
             write_reg(GPIOA_AFSEL, read_reg(GPIOA_AFSEL) | 0b11);
             write_reg(GPIOA_DEN, read_reg(GPIOA_DEN) | 0b11);
             write_reg(CR, 0); // disabled while configuring
-            // 12 MHz reset clock / (16 * 115200) = 6.51: integer 6, fraction 0.51 * 64 = 33.
+                              // 12 MHz reset clock / (16 * 115200) = 6.51: integer 6, fraction 0.51 * 64 = 33.
             write_reg(IBRD, 6);
             write_reg(FBRD, 33);
             write_reg(LCRH, 0b11 << 5 | 1 << 4); // 8 bits, FIFOs on

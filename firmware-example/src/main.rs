@@ -186,7 +186,11 @@ struct Timing {
 fn timed_pass(clip: &Clip<'static>) -> Result<Timing, Failure> {
     let mut player = decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?;
     let mut out = [0i32; MAX_CHANNELS];
-    let mut timing = Timing { frames: 0, total_ticks: 0, max_frame_ticks: 0 };
+    let mut timing = Timing {
+        frames: 0,
+        total_ticks: 0,
+        max_frame_ticks: 0,
+    };
     let mut prev = ticks::now();
     loop {
         let result = decoder_glue::next_frame(&mut player, &mut out);
@@ -196,7 +200,10 @@ fn timed_pass(clip: &Clip<'static>) -> Result<Timing, Failure> {
         match result {
             Ok(Some(index)) => {
                 if index != timing.frames {
-                    return Err(Failure::FrameIndex { expected: timing.frames, got: index });
+                    return Err(Failure::FrameIndex {
+                        expected: timing.frames,
+                        got: index,
+                    });
                 }
                 timing.frames += 1;
                 timing.total_ticks += u64::from(spent);
@@ -219,7 +226,10 @@ fn print_pass(clip: &Clip<'static>, text: &mut Out) -> Result<u32, Failure> {
         match decoder_glue::next_frame(&mut player, &mut out) {
             Ok(Some(index)) => {
                 if index != frames {
-                    return Err(Failure::FrameIndex { expected: frames, got: index });
+                    return Err(Failure::FrameIndex {
+                        expected: frames,
+                        got: index,
+                    });
                 }
                 frames += 1;
                 for (i, value) in out.iter().take(channels).enumerate() {
@@ -258,7 +268,10 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     let timing = timed_pass(&clip)?;
     let printed = print_pass(&clip, text)?;
     if timing.frames != header_frames || printed != header_frames {
-        return Err(Failure::FrameCount { header: header_frames, decoded: timing.frames.min(printed) });
+        return Err(Failure::FrameCount {
+            header: header_frames,
+            decoded: timing.frames.min(printed),
+        });
     }
 
     // ---- statistics (all `# ` lines; excluded from host comparisons)
@@ -269,7 +282,10 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     let parse = instructions(u64::from(parse_ticks), cal);
     let new = instructions(u64::from(new_ticks), cal);
     let total = parse + new + decode;
-    text.str("# board=").str(board::NAME).kv("max_channels", MAX_CHANNELS as u64).nl();
+    text.str("# board=")
+        .str(board::NAME)
+        .kv("max_channels", MAX_CHANNELS as u64)
+        .nl();
     text.str("#")
         .kv("instructions_total", total)
         .kv("frames", u64::from(timing.frames))
@@ -281,18 +297,34 @@ fn run(text: &mut Out) -> Result<(), Failure> {
         .kv("frames", u64::from(timing.frames))
         .kv("per_frame", decode / frames)
         .kv("per_channel_x100", decode * 100 / values)
-        .kv("max_frame", instructions(u64::from(timing.max_frame_ticks), cal))
+        .kv(
+            "max_frame",
+            instructions(u64::from(timing.max_frame_ticks), cal),
+        )
         .nl();
-    text.str("#").kv("parse_instructions", parse).kv("player_new_instructions", new).nl();
     text.str("#")
-        .kv("calibration_instructions", u64::from(CALIBRATION_INSTRUCTIONS))
+        .kv("parse_instructions", parse)
+        .kv("player_new_instructions", new)
+        .nl();
+    text.str("#")
+        .kv(
+            "calibration_instructions",
+            u64::from(CALIBRATION_INSTRUCTIONS),
+        )
         .kv("calibration_ticks", u64::from(cal))
         .kv("instructions_per_tick", instructions(1, cal))
         .kv("decode_ticks", timing.total_ticks)
         .nl();
-    text.str("#").kv("state_bytes", size_of::<Player<'static, MAX_CHANNELS>>() as u64).nl();
+    text.str("#")
+        .kv(
+            "state_bytes",
+            size_of::<Player<'static, MAX_CHANNELS>>() as u64,
+        )
+        .nl();
     text.str("#").kv("flash_clip_bytes", CLIP.len() as u64).nl();
-    text.str("#").kv("stack_bytes_used", stack::used_bytes() as u64).nl();
+    text.str("#")
+        .kv("stack_bytes_used", stack::used_bytes() as u64)
+        .nl();
     Ok(())
 }
 
@@ -305,10 +337,16 @@ fn report(text: &mut Out, failure: &Failure) {
             text.nl();
         }
         Failure::FrameIndex { expected, got } => {
-            text.str("# error frame_index").kv("expected", u64::from(*expected)).kv("got", u64::from(*got)).nl();
+            text.str("# error frame_index")
+                .kv("expected", u64::from(*expected))
+                .kv("got", u64::from(*got))
+                .nl();
         }
         Failure::FrameCount { header, decoded } => {
-            text.str("# error frame_count").kv("header", u64::from(*header)).kv("decoded", u64::from(*decoded)).nl();
+            text.str("# error frame_count")
+                .kv("header", u64::from(*header))
+                .kv("decoded", u64::from(*decoded))
+                .nl();
         }
     }
 }
@@ -361,6 +399,8 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 #[exception]
 unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
     let mut text = Text(Uart::steal());
-    text.str("\n# error hardfault").kv("pc", u64::from(frame.pc())).str("\n# end\n");
+    text.str("\n# error hardfault")
+        .kv("pc", u64::from(frame.pc()))
+        .str("\n# end\n");
     exit(false)
 }

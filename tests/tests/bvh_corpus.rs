@@ -9,9 +9,7 @@
 
 use mocap_encoder::motion::{ChannelKind, Motion};
 use mocap_encoder::{bvh, kinematics, units};
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 use std::time::Instant;
 
 /// cmu/: file, frames (all: 31 joints, 96 channels, 120 Hz).
@@ -44,29 +42,13 @@ const ICLONE: [(&str, &str, usize, usize, usize); 16] = [
     ("007_12.bvh", "CC_Base_Hip", 100, 303, 132),
 ];
 
-/// The corpus folder, or `None` (after saying so on stderr) if it is absent.
+/// The corpus folder, or `None` (after a visible SKIPPED line) if absent.
 fn corpus() -> Option<PathBuf> {
-    let workspace = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
-    let dir = match std::env::var_os("MOCAP_CORPUS") {
-        Some(p) if Path::new(&p).is_absolute() => PathBuf::from(p),
-        Some(p) => workspace.join(p),
-        None => workspace.join("../shared/data"),
-    };
+    let dir = mocap_tests::corpus_dir();
     if dir.is_dir() {
         Some(dir.canonicalize().unwrap_or(dir))
     } else {
-        // Written straight to stderr, bypassing the test harness's output
-        // capture, so the skip is visible in a normal `cargo test` run; once
-        // per run, as one write, so parallel tests do not interleave it.
-        static ONCE: Once = Once::new();
-        ONCE.call_once(|| {
-            let line = format!(
-                "\nSKIPPED: corpus not found at {} (set MOCAP_CORPUS)\n",
-                dir.display()
-            );
-            let _ = std::io::stderr().lock().write_all(line.as_bytes());
-        });
-        None
+        mocap_tests::corpus_files("cmu").map(|_| dir)
     }
 }
 

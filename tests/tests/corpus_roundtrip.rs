@@ -8,7 +8,9 @@ use mocap_encoder::{bvh, clipfile, fixed, metrics, units};
 use mocap_tests::corpus_files;
 
 fn roundtrip(folder: &str, bound: &str) {
-    let Some(files) = corpus_files(folder) else { return };
+    let Some(files) = corpus_files(folder) else {
+        return;
+    };
     assert!(!files.is_empty(), "no .bvh files in {folder}");
     let spec: BoundSpec = bound.parse().unwrap();
     let b = Bound::from_specs(&[spec]);
@@ -28,7 +30,12 @@ fn roundtrip(folder: &str, bound: &str) {
         let frames = clipfile::decode_all(&clip).unwrap();
         let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
         let x = metrics::compare(&m, &back, unit.metres(), None, enc.bytes.len(), 0);
-        assert_eq!(x, enc.metrics, "{}: encoder's own metrics differ", file.display());
+        assert_eq!(
+            x,
+            enc.metrics,
+            "{}: encoder's own metrics differ",
+            file.display()
+        );
         assert!(b.holds(&x), "{} at {bound}: {x:?}", file.display());
         match spec {
             BoundSpec::Degrees(d) => assert!(x.angle_max_deg <= d),
@@ -45,7 +52,10 @@ fn roundtrip(folder: &str, bound: &str) {
             x.max_joint_err_mm
         );
     }
-    eprintln!("{folder} @ {bound}: aggregate ratio {:.2}", raw as f64 / clips as f64);
+    eprintln!(
+        "{folder} @ {bound}: aggregate ratio {:.2}",
+        raw as f64 / clips as f64
+    );
 }
 
 #[test]
@@ -75,7 +85,9 @@ fn iclone_at_20mm() {
 
 #[test]
 fn index_35_01_reaches_ratio_6_at_1deg() {
-    let Some(files) = corpus_files("cmu") else { return };
+    let Some(files) = corpus_files("cmu") else {
+        return;
+    };
     let Some(f) = files.iter().find(|p| p.ends_with("35_01.bvh")) else {
         panic!("35_01.bvh missing from the corpus");
     };
@@ -89,5 +101,9 @@ fn index_35_01_reaches_ratio_6_at_1deg() {
     let enc = encode::encode(&m, &opts).unwrap();
     eprintln!("35_01 @ 1deg: {:?}", enc.metrics);
     assert!(enc.metrics.angle_max_deg <= 1.0);
-    assert!(enc.metrics.ratio_f32 >= 6.0, "ratio {}", enc.metrics.ratio_f32);
+    assert!(
+        enc.metrics.ratio_f32 >= 6.0,
+        "ratio {}",
+        enc.metrics.ratio_f32
+    );
 }

@@ -42,7 +42,10 @@ fn encode_at(m: &mocap_encoder::motion::Motion, bound: &str, key_interval: Optio
 }
 
 fn hammer(name: &str, clip: &[u8], rounds: usize, seed: u64) -> (usize, usize) {
-    assert!(exercise_decoder(clip).is_ok(), "{name}: the valid clip must decode");
+    assert!(
+        exercise_decoder(clip).is_ok(),
+        "{name}: the valid clip must decode"
+    );
     let mut rng = Rng(seed);
     let (mut ok, mut err) = (0, 0);
     let mut tally = |r: Result<u64, mocap_decoder::Error>| match r {
@@ -89,8 +92,13 @@ fn demo_clip_mutants_never_panic() {
 
 #[test]
 fn corpus_clip_mutants_never_panic() {
-    let Some(files) = corpus_files("cmu") else { return };
-    let file = files.iter().find(|p| p.ends_with("35_17.bvh")).unwrap_or(&files[0]);
+    let Some(files) = corpus_files("cmu") else {
+        return;
+    };
+    let file = files
+        .iter()
+        .find(|p| p.ends_with("35_17.bvh"))
+        .unwrap_or(&files[0]);
     let m = bvh::read_file(file).unwrap();
     let clip = encode_at(&m, "1deg", Some(16));
     let (ok, err) = hammer("35_17", &clip, 3000, 0xC0FFEE);

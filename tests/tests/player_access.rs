@@ -45,7 +45,11 @@ fn sample_at_follows_the_spec() {
     let clip = Clip::parse(&bytes).unwrap();
     let all = clipfile::decode_all(&clip).unwrap();
     let h = clip.header();
-    let (n, frames, period) = (h.channel_count(), h.frame_count() as usize, u64::from(h.frame_time_ns()));
+    let (n, frames, period) = (
+        h.channel_count(),
+        h.frame_count() as usize,
+        u64::from(h.frame_time_ns()),
+    );
     let mut player = Player::<64>::new(&clip).unwrap();
     let mut out = [0i32; 64];
     // 50 Hz servo ticks over a 60 Hz clip, plus times past the end.

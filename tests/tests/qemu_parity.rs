@@ -26,8 +26,7 @@ fn qemu_available() -> bool {
         if std::env::var_os("CI").is_some() {
             panic!("qemu-system-arm missing in CI: run the README's test command");
         }
-        eprintln!("SKIPPED: qemu-system-arm not found (run scripts/test.sh, which installs it)");
-        println!("SKIPPED: qemu-system-arm not found");
+        mocap_tests::skipped("qemu-system-arm not found (run scripts/test.sh, which installs it)");
     }
     ok
 }
@@ -58,7 +57,11 @@ fn run_board(board: &str, clip: &Path) -> String {
         clip.display(),
         out.status,
         String::from_utf8_lossy(&out.stderr),
-        stdout.lines().filter(|l| l.starts_with('#')).collect::<Vec<_>>().join("\n")
+        stdout
+            .lines()
+            .filter(|l| l.starts_with('#'))
+            .collect::<Vec<_>>()
+            .join("\n")
     );
     stdout
 }
@@ -85,7 +88,11 @@ fn check(name: &str, m: &Motion, key_interval: Option<u16>) {
             expected.len()
         );
         let stats: Vec<&str> = uart.lines().filter(|l| l.starts_with("# ")).collect();
-        eprintln!("{name} on {board}: {} frames identical; {}", m.frames(), stats.join("; "));
+        eprintln!(
+            "{name} on {board}: {} frames identical; {}",
+            m.frames(),
+            stats.join("; ")
+        );
     }
 }
 
@@ -96,11 +103,17 @@ fn firmware_output_matches_host_on_three_cores() {
     }
     check("demo", &generate::animatronic_demo(), None);
     if let Some(files) = corpus_files("cmu") {
-        let f = files.iter().find(|p| p.ends_with("35_01.bvh")).unwrap_or(&files[0]);
+        let f = files
+            .iter()
+            .find(|p| p.ends_with("35_01.bvh"))
+            .unwrap_or(&files[0]);
         check("cmu-35_01", &bvh::read_file(f).unwrap(), None);
     }
     if let Some(files) = corpus_files("iclone-cmu") {
-        let f = files.iter().find(|p| p.ends_with("002_03.bvh")).unwrap_or(&files[0]);
+        let f = files
+            .iter()
+            .find(|p| p.ends_with("002_03.bvh"))
+            .unwrap_or(&files[0]);
         check("iclone-002_03", &bvh::read_file(f).unwrap(), Some(16));
     }
 }

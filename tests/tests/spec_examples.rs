@@ -87,8 +87,14 @@ fn examples_decode_to_the_stated_values() {
 fn encoder_writes_the_examples_byte_for_byte() {
     for ex in examples() {
         let clip = Clip::parse(&ex.bytes).unwrap();
-        let sections: Vec<(u8, Vec<u8>)> = clip.sections().map(|s| (s.id, s.bytes.to_vec())).collect();
-        assert_eq!(mocap_encoder::container::assemble(&sections), ex.bytes, "{}", ex.name);
+        let sections: Vec<(u8, Vec<u8>)> =
+            clip.sections().map(|s| (s.id, s.bytes.to_vec())).collect();
+        assert_eq!(
+            mocap_encoder::container::assemble(&sections),
+            ex.bytes,
+            "{}",
+            ex.name
+        );
     }
 }
 
@@ -124,7 +130,11 @@ fn every_flipped_bit_is_rejected() {
         for bit in 0..ex.bytes.len() * 8 {
             let mut b = ex.bytes.clone();
             b[bit / 8] ^= 1 << (bit % 8);
-            assert!(Clip::parse(&b).is_err(), "{}: flip of bit {bit} accepted", ex.name);
+            assert!(
+                Clip::parse(&b).is_err(),
+                "{}: flip of bit {bit} accepted",
+                ex.name
+            );
         }
     }
 }
@@ -139,7 +149,10 @@ fn errors_are_typed() {
     ));
     let mut b = ex.bytes.clone();
     b[4] = 9;
-    assert_eq!(Clip::parse(&b).unwrap_err(), Error::ContainerUnsupportedVersion { version: 9 });
+    assert_eq!(
+        Clip::parse(&b).unwrap_err(),
+        Error::ContainerUnsupportedVersion { version: 9 }
+    );
     let clip = Clip::parse(&ex.bytes).unwrap();
     let mut small = [0i32; 0];
     let mut player = Player::<4>::new(&clip).unwrap();
@@ -150,10 +163,16 @@ fn errors_are_typed() {
             actual: 0
         }
     );
-    assert!(matches!(Player::<0>::new(&clip), Err(Error::PlayerCapacity { .. })));
+    assert!(matches!(
+        Player::<0>::new(&clip),
+        Err(Error::PlayerCapacity { .. })
+    ));
     let mut out = [0i32; 1];
     assert_eq!(
         player.frame(2, &mut out).unwrap_err(),
-        Error::PlayerFrameOutOfRange { frame: 2, frames: 2 }
+        Error::PlayerFrameOutOfRange {
+            frame: 2,
+            frames: 2
+        }
     );
 }
