@@ -109,10 +109,11 @@ where
         .configure_mesh()
         .x_desc("time (s)")
         .y_desc("error (mm)")
-        .label_style(("sans-serif", 13))
+        .label_style(("sans-serif", 15))
         .draw()
         .map_err(e)?;
-    let series: [(&str, RGBColor, fn(&(f64, f64)) -> f64); 2] = [
+    type Pick = fn(&(f64, f64)) -> f64;
+    let series: [(&str, RGBColor, Pick); 2] = [
         ("max over joints", PALETTE[3], |x| x.1),
         ("RMS over joints", PALETTE[0], |x| x.0),
     ];
@@ -134,7 +135,7 @@ where
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .label_font(("sans-serif", 14))
+        .label_font(("sans-serif", 16))
         .position(SeriesLabelPosition::UpperRight)
         .draw()
         .map_err(e)?;
@@ -186,7 +187,7 @@ where
         .configure_mesh()
         .x_desc("ARMS (mm)")
         .y_desc("compression ratio (f32 / clip bytes)")
-        .label_style(("sans-serif", 13))
+        .label_style(("sans-serif", 15))
         .draw()
         .map_err(e)?;
     // One grey line per file through its bounds (sorted by ARMS).
@@ -233,7 +234,7 @@ where
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .label_font(("sans-serif", 14))
+        .label_font(("sans-serif", 16))
         .position(SeriesLabelPosition::LowerRight)
         .draw()
         .map_err(e)?;

@@ -146,6 +146,59 @@ fn idw_weights_sum_to_one() {
     }
 }
 
+/// Degenerate distances: a frame on a key frame (h = 0), all key frames at
+/// the frame (R = 0), a single key frame, all at the same distance, distances
+/// so small or large, and p so large, that the plain powers overflow or
+/// underflow. The weights stay finite and sum to one, and the placed point
+/// stays inside the key frames' bounding box (it is a convex combination).
+#[test]
+fn idw_weights_finite_in_degenerate_cases() {
+    let cases: [&[f64]; 9] = [
+        &[0.0],
+        &[0.0, 0.0, 0.0],
+        &[0.0, 1.0, 2.0],
+        &[1.5],
+        &[0.7, 0.7, 0.7, 0.7],
+        &[2e-12, 1.0, 3.0],
+        &[1e-200, 1e-100, 1.0],
+        &[1e200, 1e250, 1e300],
+        &[1e-3, 1e-3 * (1.0 + 1e-15), 5.0],
+    ];
+    let key_xy = [[1.0, 2.0], [5.0, -1.0], [0.0, 0.0], [-3.0, 4.0]];
+    for h in cases {
+        for scheme in [Scheme::Eq2, Scheme::Eq3, Scheme::Eq4] {
+            for p in [1.0, 2.0, 8.0, 64.0, 400.0] {
+                let w = idw::weights(h, scheme, p);
+                let sum: f64 = w.iter().sum();
+                assert!(
+                    w.iter().all(|x| x.is_finite() && *x >= 0.0) && (sum - 1.0).abs() < 1e-9,
+                    "{scheme} p={p} h={h:?}: {w:?}"
+                );
+                let xy = idw::place(h, &key_xy[..h.len()], scheme, p);
+                for c in 0..2 {
+                    let lo = key_xy[..h.len()]
+                        .iter()
+                        .map(|k| k[c])
+                        .fold(f64::INFINITY, f64::min);
+                    let hi = key_xy[..h.len()]
+                        .iter()
+                        .map(|k| k[c])
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    assert!(
+                        xy[c] >= lo - 1e-9 && xy[c] <= hi + 1e-9,
+                        "{scheme} p={p} h={h:?}: {xy:?}"
+                    );
+                }
+            }
+        }
+    }
+    // Eq. 3 with a key frame just outside the exact-hit tolerance and a
+    // large p: the old plain power overflowed to ∞ and fell back to equal
+    // weights (the centroid); the frame belongs on that key frame.
+    let w = idw::weights(&[2e-12, 1.0, 3.0], Scheme::Eq3, 64.0);
+    assert!(w[0] > 1.0 - 1e-9, "{w:?}");
+}
+
 /// A small skeleton: root (6 channels), spine, two arms (3 rotations each).
 fn skeleton() -> Skeleton {
     let rot = vec![Zrotation, Xrotation, Yrotation];
@@ -251,17 +304,18 @@ fn heading_and_root_translation_do_not_change_the_features() {
 }
 
 fn small_options() -> TrackOptions {
-    let mut o = TrackOptions::default();
-    o.som = SomConfig {
-        width: 5,
-        height: 5,
-        epochs: 15,
-        seed: 11,
-        sigma_end: 0.7,
-    };
-    o.k = 8;
-    o.neighbours = Some(8);
-    o
+    TrackOptions {
+        som: SomConfig {
+            width: 5,
+            height: 5,
+            epochs: 15,
+            seed: 11,
+            sigma_end: 0.7,
+        },
+        k: 8,
+        neighbours: Some(8),
+        ..TrackOptions::default()
+    }
 }
 
 #[test]
@@ -317,7 +371,8 @@ fn svg_has_one_path_per_clip_and_one_marker_per_key_frame() {
         .skip(1)
         .filter(|e| e.split('>').next().unwrap().contains(&key_fill))
         .count();
-    assert_eq!(markers, space.key_count());
+    // One per key frame, and the legend's sample.
+    assert_eq!(markers, space.key_count() + 1);
 }
 
 fn corpus() -> Option<PathBuf> {

@@ -71,11 +71,7 @@ pub struct QuatFrames {
 impl QuatFrames {
     /// Number of frames.
     pub fn frames(&self) -> usize {
-        if self.dim == 0 {
-            0
-        } else {
-            self.data.len() / self.dim
-        }
+        self.data.len().checked_div(self.dim).unwrap_or(0)
     }
 }
 

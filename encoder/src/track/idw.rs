@@ -58,6 +58,11 @@ impl fmt::Display for Scheme {
 }
 
 /// Weights of the key frames at distances `h` (all ≥ 0), summing to one.
+///
+/// The weights are formed as logarithms and normalised against the largest,
+/// so no power can overflow or underflow to a non-finite or all-zero sum: a
+/// frame at (or within 1e-12 of) a key frame takes that key frame's position
+/// under eq. 2 and 3, `R = 0` (all distances zero) gives equal weights.
 pub fn weights(h: &[f64], scheme: Scheme, p: f64) -> Vec<f64> {
     let n = h.len();
     if n == 0 {
@@ -71,28 +76,39 @@ pub fn weights(h: &[f64], scheme: Scheme, p: f64) -> Vec<f64> {
         }
     }
     let r = h.iter().copied().fold(0.0f64, f64::max);
-    let raw: Vec<f64> = match scheme {
-        // Computed as exp(−p·ln(h/h_min)) so large p cannot underflow.
-        Scheme::Eq2 => {
-            let hmin = h.iter().copied().fold(f64::INFINITY, f64::min);
-            h.iter().map(|&d| (-p * (d / hmin).ln()).exp()).collect()
-        }
+    // ln of the unnormalised weight; −∞ for a zero weight.
+    let log_w: Vec<f64> = match scheme {
+        Scheme::Eq2 => h.iter().map(|&d| -p * d.ln()).collect(),
         Scheme::Eq3 => h
             .iter()
-            .map(|&d| ((r - d) / (r * d)).max(0.0).powf(p))
+            .map(|&d| {
+                let v = (r - d) / (r * d);
+                if v > 0.0 {
+                    p * v.ln()
+                } else {
+                    f64::NEG_INFINITY
+                }
+            })
             .collect(),
-        Scheme::Eq4 => {
-            if r <= 0.0 {
-                vec![1.0; n]
-            } else {
-                h.iter()
-                    .map(|&d| ((r - d) / r).max(0.0).powf(p).exp())
-                    .collect()
-            }
-        }
+        Scheme::Eq4 => h
+            .iter()
+            .map(|&d| {
+                if r > 0.0 {
+                    ((r - d) / r).max(0.0).powf(p)
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
     };
-    let sum: f64 = raw.iter().sum();
-    if sum > 0.0 && sum.is_finite() {
+    let top = log_w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !top.is_finite() {
+        // Every weight zero (eq. 3 with all key frames at distance R).
+        return vec![1.0 / n as f64; n];
+    }
+    let raw: Vec<f64> = log_w.iter().map(|&l| (l - top).exp()).collect();
+    let sum: f64 = raw.iter().sum(); // ≥ 1 (the largest term is 1) unless a distance is NaN
+    if sum.is_finite() {
         raw.iter().map(|w| w / sum).collect()
     } else {
         vec![1.0 / n as f64; n]
