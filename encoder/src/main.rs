@@ -386,7 +386,10 @@ fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
                 let chans = info.per_channel(h.channel_count());
                 let n = chans.len().max(1);
                 let key: u32 = chans.iter().map(|c| u32::from(c.key_bits)).sum();
-                let delta: u32 = chans.iter().map(|c| u32::from(c.delta_bits.unwrap_or(0))).sum();
+                let delta: u32 = chans
+                    .iter()
+                    .map(|c| u32::from(c.delta_bits.unwrap_or(0)))
+                    .sum();
                 let unchanged = chans.iter().filter(|c| c.delta_bits.is_none()).count();
                 let deltas = chans.iter().filter(|c| c.accumulate).count();
                 s += &format!(

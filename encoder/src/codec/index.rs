@@ -239,7 +239,9 @@ fn write_set(entries: &[Entry]) -> (Vec<u8>, Vec<Entry>) {
     let mut out = Vec::new();
     let mut groups = 0u16;
     out.extend_from_slice(&[0, 0]);
-    for run in order.chunk_by(|a, b| (a.bits, a.shift, a.accumulate) == (b.bits, b.shift, b.accumulate)) {
+    for run in
+        order.chunk_by(|a, b| (a.bits, a.shift, a.accumulate) == (b.bits, b.shift, b.accumulate))
+    {
         for chunk in run.chunks(usize::from(u16::MAX)) {
             let e0 = chunk[0];
             let flags = if e0.accumulate { FLAG_ACCUMULATE } else { 0 };
@@ -308,7 +310,12 @@ impl IndexEncoding {
         let placed: Vec<(u16, Option<u16>)> = self
             .channels
             .iter()
-            .map(|ch| (pool.place(&ch.key), ch.delta.as_ref().map(|d| pool.place(d))))
+            .map(|ch| {
+                (
+                    pool.place(&ch.key),
+                    ch.delta.as_ref().map(|d| pool.place(d)),
+                )
+            })
             .collect();
         let mut key = Vec::new();
         let mut delta = Vec::new();
@@ -342,7 +349,10 @@ impl IndexEncoding {
             let is_key = self.key_interval == 0 || f % usize::from(self.key_interval) == 0;
             let order = if is_key { &key_order } else { &delta_order };
             for e in order {
-                bits.write(u32::from(self.channels[usize::from(e.channel)].indices[f]), e.bits);
+                bits.write(
+                    u32::from(self.channels[usize::from(e.channel)].indices[f]),
+                    e.bits,
+                );
             }
         }
         let mut out = Vec::new();
