@@ -4,6 +4,7 @@
 use crate::clip::Clip;
 #[cfg(feature = "codec-index")]
 use crate::codec::IndexCodec;
+#[cfg(feature = "codec-index")]
 use crate::consts;
 use crate::error::Error;
 
@@ -17,13 +18,12 @@ enum Codec<'a> {
 }
 
 fn open_codec<'a>(clip: &Clip<'a>) -> Result<Codec<'a>, Error> {
-    let header = clip.header();
     match clip.codec_id() {
         #[cfg(feature = "codec-index")]
         consts::SECTION_CODEC_INDEX => Ok(Codec::Index(IndexCodec::parse(
             clip.codec_bytes(),
-            header.channel_count(),
-            header.frame_count(),
+            clip.header().channel_count(),
+            clip.header().frame_count(),
         )?)),
         _ => Err(Error::ContainerNoCodec),
     }
@@ -37,7 +37,8 @@ pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
 /// Plays a clip of at most `N` channels.
 ///
 /// State: the codec view (a few slices) and one frame of `N` values, so
-/// `size_of::<Player<N>>()` is about `4·N + 64` bytes on a 32-bit MCU.
+/// `size_of::<Player<N>>()` is `4·N + 80` bytes on a 32-bit MCU (measured
+/// on thumbv6m/7m/7em; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
 #[derive(Clone, Debug)]
 pub struct Player<'a, const N: usize> {
@@ -184,6 +185,8 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
     match codec {
         #[cfg(feature = "codec-index")]
         Codec::Index(c) => c.decode_frame(f, values),
-        Codec::None(_) => {}
+        Codec::None(_) => {
+            let _ = (f, values);
+        }
     }
 }
