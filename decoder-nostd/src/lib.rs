@@ -26,6 +26,7 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+#[cfg(feature = "codec-index")]
 mod bits;
 mod clip;
 #[cfg(feature = "codec-index")]
