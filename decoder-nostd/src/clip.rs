@@ -66,6 +66,8 @@ pub struct Clip<'a> {
     section_count: u16,
     header: Header<'a>,
     codec_id: u8,
+    // Read only by codecs, all of which may be compiled out.
+    #[cfg_attr(not(feature = "codec-index"), allow(dead_code))]
     codec: &'a [u8],
 }
 
@@ -175,6 +177,7 @@ impl<'a> Clip<'a> {
     }
 
     /// The codec section's bytes.
+    #[cfg_attr(not(feature = "codec-index"), allow(dead_code))]
     pub(crate) fn codec_bytes(&self) -> &'a [u8] {
         self.codec
     }
