@@ -29,6 +29,7 @@ impl<'a> Reader<'a> {
     }
 
     /// Everything not read yet; the cursor moves to the end.
+    #[cfg_attr(not(feature = "codec-index"), allow(dead_code))]
     pub(crate) fn rest(&mut self) -> &'a [u8] {
         let s = self.bytes.get(self.pos..).unwrap_or(&[]);
         self.pos = self.bytes.len();
