@@ -139,19 +139,13 @@ pub struct Encoded {
 /// Per-channel tolerances (fixed-point units) for a position budget scale
 /// `s_um` (µm; `None` = no position bound).
 fn tolerances(
-    m: &Motion,
     fixed: &FixedChannels,
     opts: &EncodeOptions,
     levers_um: &[f64],
+    joint_of: &[usize],
     s_um: Option<f64>,
     tighten: f64,
 ) -> Vec<i64> {
-    let joint_of: Vec<usize> = m
-        .skeleton
-        .channel_list()
-        .into_iter()
-        .map(|(j, _)| j)
-        .collect();
     fixed
         .kinds
         .iter()
@@ -266,10 +260,11 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
         .into_iter()
         .map(|l| l * opts.metres_per_unit * 1e6)
         .collect();
+    let joint_of = m.skeleton.channel_joints();
     let mut attempts = 0;
     let mut tighten = 1.0;
     let run = |s_um: Option<f64>, tighten: f64| {
-        let tol = tolerances(m, &fixed, opts, &levers_um, s_um, tighten);
+        let tol = tolerances(&fixed, opts, &levers_um, &joint_of, s_um, tighten);
         attempt(m, &fixed, &tol, opts, &original_mm)
     };
     let best = match opts.bound.position_mm {

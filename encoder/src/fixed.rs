@@ -61,12 +61,7 @@ pub fn wrap_degrees(v: f64) -> f64 {
 
 /// Converts a motion to integer channels.
 pub fn to_fixed(m: &Motion, metres_per_unit: f64) -> FixedChannels {
-    let kinds: Vec<ChannelKind> = m
-        .skeleton
-        .channel_list()
-        .into_iter()
-        .map(|(_, k)| k)
-        .collect();
+    let kinds = m.skeleton.channel_kinds();
     let values = kinds
         .iter()
         .enumerate()
@@ -93,11 +88,7 @@ pub fn from_fixed(
     frames: &[i32],
     metres_per_unit: f64,
 ) -> Motion {
-    let kinds: Vec<ChannelKind> = skeleton
-        .channel_list()
-        .into_iter()
-        .map(|(_, k)| k)
-        .collect();
+    let kinds = skeleton.channel_kinds();
     let n = kinds.len().max(1);
     let values = frames
         .iter()

@@ -105,12 +105,7 @@ pub fn compare(
         }
     }
 
-    let kinds: Vec<_> = original
-        .skeleton
-        .channel_list()
-        .into_iter()
-        .map(|(_, k)| k)
-        .collect();
+    let kinds = original.skeleton.channel_kinds();
     let (mut ang_sq, mut ang_n, mut ang_max, mut pos_max) = (0.0, 0usize, 0.0f64, 0.0f64);
     for f in 0..frames {
         let (x, y) = (original.frame(f), decoded.frame(f));

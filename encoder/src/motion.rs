@@ -47,6 +47,19 @@ impl Skeleton {
             .collect()
     }
 
+    /// The kind of every channel, in frame-row order.
+    pub fn channel_kinds(&self) -> Vec<ChannelKind> {
+        self.joints
+            .iter()
+            .flat_map(|j| j.channels.iter().copied())
+            .collect()
+    }
+
+    /// The joint of every channel, in frame-row order.
+    pub fn channel_joints(&self) -> Vec<usize> {
+        self.channel_list().into_iter().map(|(j, _)| j).collect()
+    }
+
     /// `Joint.Kind` names of every channel, e.g. `LeftForeArm.Zrotation`.
     pub fn channel_names(&self) -> Vec<String> {
         self.channel_list()

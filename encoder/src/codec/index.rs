@@ -27,6 +27,7 @@ pub struct ChannelCode {
 }
 
 /// A channel coded for one key interval, with its cost.
+#[derive(Clone)]
 struct Candidate {
     code: ChannelCode,
     bits: u64,
@@ -131,16 +132,15 @@ fn closed_loop(
     })
 }
 
-/// Codes one channel for key interval `k`: the cheaper of absolute and
-/// delta coding. `None` if the tolerance cannot be met with 12-bit codes.
-fn code_channel(x: &[i64], tol: i64, k: usize) -> Option<Candidate> {
-    let abs = absolute(x, tol)?;
+/// Codes one channel for key interval `k`: the cheaper of its absolute
+/// coding `abs` (the same for every `k`) and delta coding.
+fn code_channel(x: &[i64], tol: i64, k: usize, abs: &Candidate) -> Candidate {
     if k == 0 || abs.code.key.bits <= 1 {
-        return Some(abs);
+        return abs.clone();
     }
     match delta(x, tol, k, abs.code.key.bits.saturating_sub(1)) {
-        Some(d) if d.bits < abs.bits => Some(d),
-        _ => Some(abs),
+        Some(d) if d.bits < abs.bits => d,
+        _ => abs.clone(),
     }
 }
 
@@ -172,13 +172,18 @@ pub fn encode(
         .iter()
         .map(|c| c.iter().map(|&v| i64::from(v)).collect())
         .collect();
+    // Absolute coding does not depend on the key interval: fit it once.
+    let absolutes = wide
+        .iter()
+        .enumerate()
+        .map(|(c, series)| absolute(series, tol[c].max(0)).ok_or(ToleranceTooTight { channel: c }))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut best: Option<(u64, IndexEncoding)> = None;
     for &k in intervals {
         let mut total = 0u64;
         let mut channels = Vec::with_capacity(x.len());
-        for (c, series) in wide.iter().enumerate() {
-            let cand = code_channel(series, tol[c].max(0), usize::from(k))
-                .ok_or(ToleranceTooTight { channel: c })?;
+        for (c, (series, abs)) in wide.iter().zip(&absolutes).enumerate() {
+            let cand = code_channel(series, tol[c].max(0), usize::from(k), abs);
             total += cand.bits;
             channels.push(cand.code);
         }
