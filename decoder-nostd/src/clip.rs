@@ -67,7 +67,10 @@ pub struct Clip<'a> {
     header: Header<'a>,
     codec_id: u8,
     // Read only by codecs, all of which may be compiled out.
-    #[cfg_attr(not(feature = "codec-index"), allow(dead_code))]
+    #[cfg_attr(
+        not(any(feature = "codec-index", feature = "codec-pca-spline")),
+        allow(dead_code)
+    )]
     codec: &'a [u8],
 }
 
@@ -134,7 +137,7 @@ impl<'a> Clip<'a> {
                 .ok_or(Error::ContainerSectionBounds { id })?;
             match id {
                 consts::SECTION_HEADER => header = Some(payload),
-                consts::SECTION_CODEC_INDEX => {
+                consts::SECTION_CODEC_INDEX | consts::SECTION_CODEC_PCA_SPLINE => {
                     if codec.is_some() {
                         return Err(Error::ContainerDuplicateSection { id });
                     }
@@ -177,7 +180,10 @@ impl<'a> Clip<'a> {
     }
 
     /// The codec section's bytes.
-    #[cfg_attr(not(feature = "codec-index"), allow(dead_code))]
+    #[cfg_attr(
+        not(any(feature = "codec-index", feature = "codec-pca-spline")),
+        allow(dead_code)
+    )]
     pub(crate) fn codec_bytes(&self) -> &'a [u8] {
         self.codec
     }

@@ -18,6 +18,8 @@ pub const MAX_SECTIONS: usize = 16;
 pub const SECTION_HEADER: u8 = 0x01;
 /// Section id of the `index` codec payload, §4.
 pub const SECTION_CODEC_INDEX: u8 = 0x10;
+/// Section id of the `pca-spline` codec payload, §5.
+pub const SECTION_CODEC_PCA_SPLINE: u8 = 0x11;
 
 /// Channel kind codes, SPEC.md §3.2 (`kind` field).
 pub mod kind {
@@ -57,4 +59,24 @@ pub mod index {
     pub const FLAG_ACCUMULATE: u8 = 0x80;
     /// Mask of the shift in group header byte 1.
     pub const SHIFT_MASK: u8 = 0x1F;
+}
+
+/// `pca-spline` codec constants, SPEC.md §5.
+pub mod pca {
+    /// Most principal components a group may keep.
+    pub const MAX_COMPONENTS: u8 = 16;
+    /// Largest mean shift.
+    pub const MAX_MEAN_SHIFT: u8 = 16;
+    /// Largest number of frames in one segment.
+    pub const MAX_SEGMENT_FRAMES: u32 = 32_768;
+    /// Largest bit width of a key time.
+    pub const MAX_TIME_BITS: u8 = 15;
+    /// Largest bit width of a key value.
+    pub const MAX_VALUE_BITS: u8 = 30;
+    /// Largest key value shift.
+    pub const MAX_VALUE_SHIFT: u8 = 24;
+    /// Basis entries are `i8` scaled by `2^-BASIS_SHIFT`.
+    pub const BASIS_SHIFT: u32 = 7;
+    /// Fixed-point fraction bits of positions and spline weights.
+    pub const FRAC_BITS: u32 = 16;
 }

@@ -119,6 +119,11 @@ pub enum Error {
         /// Bits present.
         available_bits: u64,
     },
+    /// The `pca-spline` codec section is malformed (§5).
+    PcaMalformed {
+        /// Which rule of §5 is broken.
+        rule: &'static str,
+    },
     /// The clip has more channels than the player's capacity.
     PlayerCapacity {
         /// Channels in the clip.
@@ -195,6 +200,7 @@ impl fmt::Display for Error {
                 f,
                 "index codec: payload has {available_bits} bits, frames need {needed_bits}"
             ),
+            Error::PcaMalformed { rule } => write!(f, "pca-spline codec: {rule}"),
             Error::PlayerCapacity { channels, capacity } => write!(
                 f,
                 "clip has {channels} channels, player capacity is {capacity}"

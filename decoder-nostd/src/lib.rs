@@ -26,10 +26,10 @@
 #[cfg(feature = "std")]
 extern crate std;
 
-#[cfg(feature = "codec-index")]
+#[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
 mod bits;
 mod clip;
-#[cfg(feature = "codec-index")]
+#[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
 mod codec;
 pub mod consts;
 mod error;
@@ -41,3 +41,10 @@ pub use clip::{Clip, Section, Sections};
 pub use error::Error;
 pub use header::{Channel, ChannelIter, ChannelKind, Header, Joint, JointIter, Unit};
 pub use player::Player;
+
+/// The fixed-point key-frame spline of the `pca-spline` codec (SPEC.md
+/// §5.4), public so the encoder fits exactly what the decoder evaluates.
+#[cfg(feature = "codec-pca-spline")]
+pub mod spline {
+    pub use crate::codec::spline::{apply, weights};
+}

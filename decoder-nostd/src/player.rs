@@ -3,8 +3,10 @@
 
 use crate::clip::Clip;
 #[cfg(feature = "codec-index")]
-use crate::codec::IndexCodec;
-#[cfg(feature = "codec-index")]
+use crate::codec::index::IndexCodec;
+#[cfg(feature = "codec-pca-spline")]
+use crate::codec::pca_spline::{Cursor, PcaSplineCodec};
+#[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
 use crate::consts;
 use crate::error::Error;
 
@@ -13,6 +15,8 @@ use crate::error::Error;
 enum Codec<'a> {
     #[cfg(feature = "codec-index")]
     Index(IndexCodec<'a>),
+    #[cfg(feature = "codec-pca-spline")]
+    PcaSpline(PcaSplineCodec<'a>),
     #[allow(dead_code)]
     None(core::marker::PhantomData<&'a ()>),
 }
@@ -21,6 +25,12 @@ fn open_codec<'a>(clip: &Clip<'a>) -> Result<Codec<'a>, Error> {
     match clip.codec_id() {
         #[cfg(feature = "codec-index")]
         consts::SECTION_CODEC_INDEX => Ok(Codec::Index(IndexCodec::parse(
+            clip.codec_bytes(),
+            clip.header().channel_count(),
+            clip.header().frame_count(),
+        )?)),
+        #[cfg(feature = "codec-pca-spline")]
+        consts::SECTION_CODEC_PCA_SPLINE => Ok(Codec::PcaSpline(PcaSplineCodec::parse(
             clip.codec_bytes(),
             clip.header().channel_count(),
             clip.header().frame_count(),
@@ -50,6 +60,10 @@ pub struct Player<'a, const N: usize> {
     state_frame: Option<u32>,
     /// Next frame [`Player::next_frame`] returns.
     cursor: u32,
+    /// Where the `pca-spline` codec is in its segment list.
+    #[cfg(feature = "codec-pca-spline")]
+    segment: Cursor,
+    /// `index`: the frame `state_frame`; `pca-spline`: blending scratch.
     state: [i32; N],
 }
 
@@ -71,6 +85,8 @@ impl<'a, const N: usize> Player<'a, N> {
             frame_time_ns: header.frame_time_ns(),
             state_frame: None,
             cursor: 0,
+            #[cfg(feature = "codec-pca-spline")]
+            segment: Cursor::default(),
             state: [0; N],
         })
     }
@@ -110,14 +126,35 @@ impl<'a, const N: usize> Player<'a, N> {
                 frames: self.frames,
             });
         }
+        if self.pose_at(u64::from(i) << 16, out) {
+            return Ok(());
+        }
         self.seek(i);
         out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
         Ok(())
     }
 
-    /// Samples the clip at `t_us` microseconds from its start (SPEC.md
-    /// §5): linear interpolation between the two neighbouring frames in
-    /// fixed point; times past the last frame hold the last frame.
+    /// Codecs that evaluate any time directly (no frame history) decode
+    /// the pose at `pos` (frames, 16.16) into `out` and return true.
+    fn pose_at(&mut self, pos: u64, out: &mut [i32]) -> bool {
+        match &self.codec {
+            #[cfg(feature = "codec-pca-spline")]
+            Codec::PcaSpline(c) => {
+                let scratch = self.state.get_mut(..self.channels).unwrap_or(&mut []);
+                c.decode_at(pos, &mut self.segment, out, scratch);
+                true
+            }
+            _ => {
+                let _ = (pos, out);
+                false
+            }
+        }
+    }
+
+    /// Samples the clip at `t_us` microseconds from its start (SPEC.md §6):
+    /// spline codecs evaluate their curves at that time; frame codecs
+    /// interpolate linearly between the two neighbouring frames in fixed
+    /// point. Times past the last frame hold the last frame.
     pub fn sample_at(&mut self, t_us: u64, out: &mut [i32]) -> Result<(), Error> {
         let out = self.output(out)?;
         let ns = t_us.saturating_mul(1000);
@@ -125,6 +162,14 @@ impl<'a, const N: usize> Player<'a, N> {
         let whole = ns / period;
         let frac = ((ns % period) << 16) / period;
         let last = self.frames - 1;
+        let pos = if whole >= u64::from(last) {
+            u64::from(last) << 16
+        } else {
+            (whole << 16) | frac
+        };
+        if self.pose_at(pos, out) {
+            return Ok(());
+        }
         if whole >= u64::from(last) {
             self.seek(last);
             out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
@@ -174,7 +219,7 @@ impl<'a, const N: usize> Player<'a, N> {
         match &self.codec {
             #[cfg(feature = "codec-index")]
             Codec::Index(c) => c.key_before(i),
-            Codec::None(_) => i,
+            _ => i,
         }
     }
 }
@@ -185,7 +230,7 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
     match codec {
         #[cfg(feature = "codec-index")]
         Codec::Index(c) => c.decode_frame(f, values),
-        Codec::None(_) => {
+        _ => {
             let _ = (f, values);
         }
     }

@@ -18,6 +18,10 @@ pub struct Row {
     pub file: String,
     /// The bound, as given.
     pub bound: String,
+    /// The codec asked for (`auto` rows name the one chosen in `chosen`).
+    pub codec: String,
+    /// The codec that made the clip.
+    pub chosen: String,
     /// Frames × channels × 4.
     pub f32_bytes: usize,
     /// Input file size.
@@ -57,11 +61,22 @@ fn group_of(p: &Path) -> String {
 }
 
 /// Runs the bench; progress goes to stderr.
+/// `bounds` are `+`-joined specs (`50mm+arms:10mm`), each one column of
+/// the table.
 pub fn run(
     paths: &[PathBuf],
-    bounds: &[BoundSpec],
-    bound_names: &[String],
+    codecs: &[CodecChoice],
+    bounds: &[String],
 ) -> Result<Vec<Row>, String> {
+    let specs = bounds
+        .iter()
+        .map(|b| {
+            b.split('+')
+                .map(|s| s.parse::<BoundSpec>())
+                .collect::<Result<Vec<_>, _>>()
+                .map(|v| Bound::from_specs(&v))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let files = expand(paths)?;
     let mut rows = Vec::new();
     for file in &files {
@@ -70,10 +85,13 @@ pub fn run(
         let file_bytes = std::fs::metadata(file)
             .map(|md| md.len() as usize)
             .unwrap_or(0);
-        for (spec, name) in bounds.iter().zip(bound_names) {
+        for (&codec, (bound, name)) in codecs
+            .iter()
+            .flat_map(|c| std::iter::repeat(c).zip(specs.iter().zip(bounds)))
+        {
             let opts = EncodeOptions {
-                codec: CodecChoice::Index,
-                bound: Bound::from_specs(&[*spec]),
+                codec,
+                bound: *bound,
                 metres_per_unit: unit.metres(),
                 key_interval: None,
             };
@@ -82,8 +100,9 @@ pub fn run(
             let mut metrics = enc.metrics;
             metrics.ratio_file = file_bytes as f64 / enc.bytes.len() as f64;
             eprintln!(
-                "  {} @ {name}: {} bytes, ratio {:.1}",
+                "  {} {} @ {name}: {} bytes, ratio {:.1}",
                 file.display(),
+                codec_name(codec),
                 enc.bytes.len(),
                 metrics.ratio_f32
             );
@@ -94,6 +113,8 @@ pub fn run(
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default(),
                 bound: name.clone(),
+                codec: codec_name(codec).into(),
+                chosen: codec_name(enc.codec).into(),
                 f32_bytes: m.frames() * m.channels() * 4,
                 file_bytes,
                 metrics,
@@ -105,31 +126,40 @@ pub fn run(
     Ok(rows)
 }
 
-/// The table as Markdown, with per-folder totals per bound.
+/// The command-line name of a codec.
+pub fn codec_name(c: CodecChoice) -> &'static str {
+    match c {
+        CodecChoice::Index => "index",
+        CodecChoice::PcaSpline => "pca-spline",
+        CodecChoice::Auto => "auto",
+    }
+}
+
+/// The table as Markdown, with per-folder totals per codec and bound.
 pub fn markdown(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| folder | file | bound | frames×ch | bytes | ratio f32 | ratio file | ARMS mm | max mm | d % | angle RMS ° | angle max ° | K |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio file | ARMS mm | max mm | d % | angle RMS ° | angle max ° | K |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let m = &r.metrics;
         s += &format!(
-            "| {} | {} | {} | {}×{} | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} |\n",
-            r.group, r.file, r.bound, m.frames, m.channels, m.bytes, m.ratio_f32, m.ratio_file,
+            "| {} | {} | {} | {} | {}×{} | {} | {:.2} | {:.1} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} |\n",
+            r.group, r.file, r.chosen, r.bound, m.frames, m.channels, m.bytes, m.ratio_f32, m.ratio_file,
             m.arms_mm, m.max_joint_err_mm, m.distortion_pct, m.angle_rms_deg, m.angle_max_deg, r.key_interval
         );
     }
-    s += "\n| folder | bound | files | total f32 bytes | total clip bytes | aggregate ratio | worst angle max ° | worst joint max mm | encode s |\n|---|---|---|---|---|---|---|---|---|\n";
-    let mut keys: Vec<(String, String)> = rows
+    s += "\n| folder | codec | bound | files | total f32 bytes | total clip bytes | aggregate ratio | worst ARMS mm | worst joint max mm | worst angle max ° | mean d % | encode s |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    let mut keys: Vec<(String, String, String)> = rows
         .iter()
-        .map(|r| (r.group.clone(), r.bound.clone()))
+        .map(|r| (r.group.clone(), r.codec.clone(), r.bound.clone()))
         .collect();
     keys.dedup();
     keys.sort();
     keys.dedup();
-    for (g, b) in keys {
+    for (g, c, b) in keys {
         let sel: Vec<&Row> = rows
             .iter()
-            .filter(|r| r.group == g && r.bound == b)
+            .filter(|r| r.group == g && r.codec == c && r.bound == b)
             .collect();
         let f32b: usize = sel.iter().map(|r| r.f32_bytes).sum();
         let clip: usize = sel.iter().map(|r| r.metrics.bytes).sum();
@@ -141,9 +171,11 @@ pub fn markdown(rows: &[Row]) -> String {
             .iter()
             .map(|r| r.metrics.max_joint_err_mm)
             .fold(0.0, f64::max);
+        let arms = sel.iter().map(|r| r.metrics.arms_mm).fold(0.0, f64::max);
+        let d = sel.iter().map(|r| r.metrics.distortion_pct).sum::<f64>() / sel.len().max(1) as f64;
         let secs: f64 = sel.iter().map(|r| r.encode_seconds).sum();
         s += &format!(
-            "| {g} | {b} | {} | {f32b} | {clip} | {:.2} | {amax:.3} | {jmax:.1} | {secs:.2} |\n",
+            "| {g} | {c} | {b} | {} | {f32b} | {clip} | {:.2} | {arms:.2} | {jmax:.1} | {amax:.3} | {d:.2} | {secs:.2} |\n",
             sel.len(),
             f32b as f64 / clip.max(1) as f64
         );

@@ -9,12 +9,12 @@ use mocap_decoder::consts;
 use mocap_decoder::Clip;
 
 use crate::clipfile;
-use crate::codec::index;
+use crate::codec::{index, pca_spline};
 use crate::container::{assemble, HeaderWire};
 use crate::fixed::{self, FixedChannels, MDEG_PER_DEG};
 use crate::kinematics;
 use crate::metrics::{self, Metrics};
-use crate::motion::Motion;
+use crate::motion::{ChannelKind, Motion};
 
 /// One error bound: degrees on rotation channels or millimetres on joint
 /// positions (`1deg`, `0.25deg`, `8mm`).
@@ -24,6 +24,9 @@ pub enum BoundSpec {
     Degrees(f64),
     /// Max joint-position error (forward kinematics), millimetres.
     Millimetres(f64),
+    /// Mean over frames of the RMS joint-position error (ARMS),
+    /// millimetres: `arms:10mm`.
+    Arms(f64),
 }
 
 impl FromStr for BoundSpec {
@@ -31,6 +34,14 @@ impl FromStr for BoundSpec {
 
     fn from_str(s: &str) -> Result<Self, String> {
         let t = s.trim();
+        if let Some(rest) = t.strip_prefix("arms:") {
+            return match rest.parse::<BoundSpec>()? {
+                BoundSpec::Millimetres(mm) => Ok(BoundSpec::Arms(mm)),
+                _ => Err(format!(
+                    "error bound '{s}': ARMS is a length, e.g. arms:10mm"
+                )),
+            };
+        }
         let (num, unit) = t
             .find(|c: char| c.is_ascii_alphabetic())
             .map(|i| t.split_at(i))
@@ -60,6 +71,8 @@ pub struct Bound {
     pub angle_deg: Option<f64>,
     /// Joint positions, millimetres.
     pub position_mm: Option<f64>,
+    /// ARMS of joint positions, millimetres.
+    pub arms_mm: Option<f64>,
 }
 
 impl Bound {
@@ -72,6 +85,7 @@ impl Bound {
         let mut b = Bound {
             angle_deg: None,
             position_mm: None,
+            arms_mm: None,
         };
         for s in specs {
             match *s {
@@ -79,6 +93,7 @@ impl Bound {
                 BoundSpec::Millimetres(m) => {
                     b.position_mm = Some(b.position_mm.map_or(m, |x| x.min(m)))
                 }
+                BoundSpec::Arms(m) => b.arms_mm = Some(b.arms_mm.map_or(m, |x| x.min(m))),
             }
         }
         b
@@ -88,17 +103,32 @@ impl Bound {
     pub fn holds(&self, m: &Metrics) -> bool {
         self.angle_deg.is_none_or(|d| m.angle_max_deg <= d)
             && self.position_mm.is_none_or(|p| m.max_joint_err_mm <= p)
-            && (self.position_mm.is_some() || m.position_max_mm <= Self::DEFAULT_TRANSLATION_MM)
+            && self.arms_mm.is_none_or(|p| m.arms_mm <= p)
+            && (self.positional() || m.position_max_mm <= Self::DEFAULT_TRANSLATION_MM)
+    }
+
+    /// True if a bound is on joint positions (max or ARMS).
+    pub fn positional(&self) -> bool {
+        self.position_mm.is_some() || self.arms_mm.is_some()
     }
 }
 
 impl fmt::Display for Bound {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match (self.angle_deg, self.position_mm) {
-            (Some(a), Some(p)) => write!(f, "{a}° and {p} mm"),
-            (Some(a), None) => write!(f, "{a}°"),
-            (None, Some(p)) => write!(f, "{p} mm"),
-            (None, None) => f.write_str("none"),
+        let mut parts = Vec::new();
+        if let Some(a) = self.angle_deg {
+            parts.push(format!("{a}°"));
+        }
+        if let Some(p) = self.position_mm {
+            parts.push(format!("{p} mm"));
+        }
+        if let Some(p) = self.arms_mm {
+            parts.push(format!("ARMS {p} mm"));
+        }
+        if parts.is_empty() {
+            f.write_str("none")
+        } else {
+            f.write_str(&parts.join(" and "))
         }
     }
 }
@@ -108,6 +138,10 @@ impl fmt::Display for Bound {
 pub enum CodecChoice {
     /// Low-resolution model-based indexing (SPEC.md §4).
     Index,
+    /// Segment PCA + key-frame splines (SPEC.md §5).
+    PcaSpline,
+    /// Every codec; keep the smallest clip that meets the bound.
+    Auto,
 }
 
 /// Options of one encode.
@@ -130,7 +164,9 @@ pub struct Encoded {
     pub bytes: Vec<u8>,
     /// Metrics measured by decoding `bytes` with the decoder.
     pub metrics: Metrics,
-    /// Key-frame interval chosen.
+    /// The codec that made the clip (never `Auto`).
+    pub codec: CodecChoice,
+    /// Key-frame interval chosen (index codec; 0 otherwise).
     pub key_interval: u16,
     /// Encode attempts (tightening rounds) needed.
     pub attempts: usize,
@@ -184,6 +220,8 @@ struct Attempt {
     bytes: Vec<u8>,
     metrics: Metrics,
     key_interval: u16,
+    /// Decoded values, `[channel][frame]`.
+    decoded: Vec<Vec<i32>>,
 }
 
 fn attempt(
@@ -204,29 +242,63 @@ fn attempt(
             m.skeleton.channel_names()[e.channel]
         )
     })?;
-    let decoded = FixedChannels {
+    let expected = FixedChannels {
         kinds: fixed.kinds.clone(),
         values: enc.decoded(),
     };
-    let header = HeaderWire::new(m, opts.metres_per_unit, &decoded);
-    let bytes = assemble(&[
-        (consts::SECTION_HEADER, header.to_bytes()),
+    let mut a = prove(
+        m,
+        fixed,
         (consts::SECTION_CODEC_INDEX, enc.to_section()?),
-    ]);
-    // Prove it with the real decoder.
+        Some(&expected),
+        opts,
+        original_mm,
+    )?;
+    a.key_interval = enc.key_interval;
+    Ok(a)
+}
+
+/// Assembles a clip around a codec section, decodes it with the `no_std`
+/// decoder, writes the decoded ranges into the header and measures it.
+/// `expected` (the encoder's own idea of the decoded values) is checked
+/// bit for bit when given.
+fn prove(
+    m: &Motion,
+    fixed: &FixedChannels,
+    section: (u8, Vec<u8>),
+    expected: Option<&FixedChannels>,
+    opts: &EncodeOptions,
+    original_mm: &[[f64; 3]],
+) -> Result<Attempt, String> {
+    let build = |ranges: &FixedChannels| {
+        let header = HeaderWire::new(m, opts.metres_per_unit, ranges);
+        assemble(&[(consts::SECTION_HEADER, header.to_bytes()), section.clone()])
+    };
+    // Decoding does not read the header's ranges: decode once with the
+    // input's, then write the decoded ones.
+    let draft = build(expected.unwrap_or(fixed));
     let clip =
-        Clip::parse(&bytes).map_err(|e| format!("internal error: own clip rejected: {e}"))?;
+        Clip::parse(&draft).map_err(|e| format!("internal error: own clip rejected: {e}"))?;
     let frames = clipfile::decode_all(&clip).map_err(|e| format!("internal error: {e}"))?;
     let n = fixed.kinds.len();
-    for (c, ch) in decoded.values.iter().enumerate() {
-        for (f, &v) in ch.iter().enumerate() {
-            if frames[f * n + c] != v {
-                return Err(format!(
-                    "internal error: decoder and encoder disagree at frame {f}, channel {c}"
-                ));
-            }
+    let decoded = FixedChannels {
+        kinds: fixed.kinds.clone(),
+        values: (0..n)
+            .map(|c| frames.iter().skip(c).step_by(n).copied().collect())
+            .collect(),
+    };
+    if let Some(e) = expected {
+        if let Some((c, f)) = first_difference(&e.values, &decoded.values) {
+            return Err(format!(
+                "internal error: decoder and encoder disagree at frame {f}, channel {c}"
+            ));
         }
     }
+    let bytes = if expected.is_some() {
+        draft
+    } else {
+        build(&decoded)
+    };
     let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, opts.metres_per_unit);
     let metrics = metrics::compare(
         m,
@@ -239,7 +311,225 @@ fn attempt(
     Ok(Attempt {
         bytes,
         metrics,
-        key_interval: enc.key_interval,
+        key_interval: 0,
+        decoded: decoded.values,
+    })
+}
+
+fn first_difference(a: &[Vec<i32>], b: &[Vec<i32>]) -> Option<(usize, usize)> {
+    a.iter()
+        .zip(b)
+        .enumerate()
+        .find_map(|(c, (x, y))| x.iter().zip(y).position(|(p, q)| p != q).map(|f| (c, f)))
+}
+
+/// Channel weights for the `pca-spline` tolerance: millimetres of joint
+/// movement per fixed-point unit under a position bound (rotation: the
+/// joint's lever arm; feet and toes count double, as in the paper), else
+/// degrees per millidegree and millimetres per micrometre.
+pub fn pca_weights(
+    m: &Motion,
+    levers_um: &[f64],
+    joint_of: &[usize],
+    kinds: &[ChannelKind],
+    mm: bool,
+) -> Vec<f64> {
+    let longest = levers_um.iter().fold(0.0f64, |a, &b| a.max(b));
+    kinds
+        .iter()
+        .enumerate()
+        .map(|(c, kind)| {
+            if !kind.is_rotation() {
+                // Translations move every joint: a quarter of the
+                // tolerance (root curves are cheap).
+                return 4e-3;
+            }
+            if !mm {
+                return 1e-3;
+            }
+            let j = joint_of[c];
+            let name = m.skeleton.joints[j].name.to_ascii_lowercase();
+            let foot = ["foot", "toe", "ankle"].iter().any(|f| name.contains(f));
+            // Joints that move nothing measured still get a small weight
+            // so they do not wander.
+            let lever_mm = (levers_um[j] / 1000.0).max(longest / 1000.0 * 0.02);
+            let w = lever_mm * std::f64::consts::PI / 180.0 / 1000.0;
+            if foot {
+                2.0 * w
+            } else {
+                w
+            }
+        })
+        .collect()
+}
+
+/// Channel groups of the `pca-spline` codec: the roots' translations and
+/// heading (Y rotation: BVH is Y-up) each alone, then one group per limb —
+/// a chain of joints between branchings — with chains of fewer than
+/// `min_channels` channels (fingers, thumbs) merged into the chain they
+/// branch from.
+pub fn pca_groups(m: &Motion, min_channels: usize) -> Vec<Vec<usize>> {
+    let joints = &m.skeleton.joints;
+    let children = |j: usize| {
+        joints
+            .iter()
+            .filter(|k| k.parent == Some(j) && !k.end_site)
+            .count()
+    };
+    // Chain of each joint: a joint continues its parent's chain when it is
+    // the parent's only child.
+    let mut chain: Vec<usize> = Vec::with_capacity(joints.len());
+    let mut parent_chain: Vec<Option<usize>> = Vec::new();
+    for (j, joint) in joints.iter().enumerate() {
+        match joint.parent {
+            Some(p) if children(p) == 1 && joints[p].parent.is_some() => chain.push(chain[p]),
+            Some(p) => {
+                chain.push(parent_chain.len());
+                parent_chain.push(Some(chain[p]));
+            }
+            None => {
+                chain.push(parent_chain.len());
+                parent_chain.push(None);
+            }
+        }
+        let _ = j;
+    }
+    let mut size = vec![0usize; parent_chain.len()];
+    for (joint, &c) in joints.iter().zip(&chain) {
+        size[c] += joint.channels.len();
+    }
+    // Merge small chains upwards (children come after parents, so walk
+    // backwards).
+    let mut target: Vec<usize> = (0..parent_chain.len()).collect();
+    for c in (0..parent_chain.len()).rev() {
+        if size[c] < min_channels {
+            if let Some(p) = parent_chain[c] {
+                size[p] += size[c];
+                target[c] = p;
+            }
+        }
+    }
+    let resolve = |mut c: usize| {
+        while target[c] != c {
+            c = target[c];
+        }
+        c
+    };
+    let mut groups: Vec<Vec<usize>> = vec![Vec::new(); parent_chain.len()];
+    let mut tracks = Vec::new();
+    let mut ch = 0;
+    for (joint, &c) in joints.iter().zip(&chain) {
+        for kind in &joint.channels {
+            if joint.parent.is_none() && (!kind.is_rotation() || *kind == ChannelKind::Yrotation) {
+                tracks.push(vec![ch]);
+            } else {
+                groups[resolve(c)].push(ch);
+            }
+            ch += 1;
+        }
+    }
+    tracks.extend(groups.into_iter().filter(|g| !g.is_empty()));
+    tracks
+}
+
+/// Encodes with `pca-spline`, searching the tolerance `τ` (log-bisection)
+/// for the smallest clip whose decoded output meets the bound.
+fn encode_pca(
+    m: &Motion,
+    fixed: &FixedChannels,
+    opts: &EncodeOptions,
+    original_mm: &[[f64; 3]],
+    levers_um: &[f64],
+    joint_of: &[usize],
+) -> Result<Encoded, String> {
+    let mm = opts.bound.positional();
+    let weights = pca_weights(m, levers_um, joint_of, &fixed.kinds, mm);
+    let groups = pca_groups(m, 9);
+    let input = pca_spline::Input {
+        values: &fixed.values,
+        weights: &weights,
+        groups: &groups,
+    };
+    let scale = match (
+        opts.bound.position_mm.or(opts.bound.arms_mm),
+        opts.bound.angle_deg,
+    ) {
+        (Some(p), _) => p,
+        (None, Some(d)) => d,
+        (None, None) => Bound::DEFAULT_TRANSLATION_MM,
+    };
+    let fps = 1.0 / m.frame_time;
+    let run = |tau: f64| -> Result<Attempt, String> {
+        let params = pca_spline::Params::new(tau, fps);
+        let mut model = pca_spline::model(&input, &params)?;
+        let try_model = |model: &pca_spline::Model| {
+            let section = model.to_section(fixed.kinds.len());
+            prove(
+                m,
+                fixed,
+                (consts::SECTION_CODEC_PCA_SPLINE, section),
+                None,
+                opts,
+                original_mm,
+            )
+        };
+        let first = try_model(&model)?;
+        // What the smooth model misses by more than τ (glitches, spikes)
+        // becomes sparse patches.
+        if model.add_patches(&input, &first.decoded, params.patch_share * tau) == 0 {
+            return Ok(first);
+        }
+        try_model(&model)
+    };
+    let (mut lo, mut hi) = (scale / 256.0, scale * 2.0);
+    let mut best: Option<Attempt> = None;
+    let mut attempts = 0;
+    for _ in 0..12 {
+        attempts += 1;
+        let tau = (lo * hi).sqrt();
+        let a = run(tau)?;
+        if std::env::var_os("MOCAP_TRACE").is_some() {
+            eprintln!(
+                "tau {tau:.3}: {} B, max {:.1} mm at {} f{}, ARMS {:.2}",
+                a.bytes.len(),
+                a.metrics.max_joint_err_mm,
+                a.metrics.max_joint_err_joint,
+                a.metrics.max_joint_err_frame,
+                a.metrics.arms_mm
+            );
+        }
+        if opts.bound.holds(&a.metrics) {
+            lo = tau;
+            if best.as_ref().is_none_or(|b| a.bytes.len() <= b.bytes.len()) {
+                best = Some(a);
+            }
+        } else {
+            hi = tau;
+        }
+        if hi / lo < 1.05 {
+            break;
+        }
+    }
+    let best = match best {
+        Some(b) => b,
+        None => {
+            attempts += 1;
+            let a = run(lo)?;
+            if !opts.bound.holds(&a.metrics) {
+                return Err(format!(
+                    "pca-spline could not meet the bound {} (max joint error {:.2} mm, angle {:.3}° at the finest tolerance)",
+                    opts.bound, a.metrics.max_joint_err_mm, a.metrics.angle_max_deg
+                ));
+            }
+            a
+        }
+    };
+    Ok(Encoded {
+        bytes: best.bytes,
+        metrics: best.metrics,
+        codec: CodecChoice::PcaSpline,
+        key_interval: 0,
+        attempts,
     })
 }
 
@@ -261,6 +551,28 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
         .map(|l| l * opts.metres_per_unit * 1e6)
         .collect();
     let joint_of = m.skeleton.channel_joints();
+    match opts.codec {
+        CodecChoice::Index => {}
+        CodecChoice::PcaSpline => {
+            return encode_pca(m, &fixed, opts, &original_mm, &levers_um, &joint_of)
+        }
+        CodecChoice::Auto => {
+            let index = encode(
+                m,
+                &EncodeOptions {
+                    codec: CodecChoice::Index,
+                    ..opts.clone()
+                },
+            );
+            let pca = encode_pca(m, &fixed, opts, &original_mm, &levers_um, &joint_of);
+            return match (index, pca) {
+                (Ok(a), Ok(b)) => Ok(if b.bytes.len() < a.bytes.len() { b } else { a }),
+                (Ok(a), Err(_)) => Ok(a),
+                (Err(_), Ok(b)) => Ok(b),
+                (Err(a), Err(b)) => Err(format!("index: {a}; pca-spline: {b}")),
+            };
+        }
+    }
     let mut attempts = 0;
     let mut tighten = 1.0;
     let run = |s_um: Option<f64>, tighten: f64| {
@@ -320,6 +632,7 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
     Ok(Encoded {
         bytes: best.bytes,
         metrics: best.metrics,
+        codec: CodecChoice::Index,
         key_interval: best.key_interval,
         attempts,
     })

@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use mocap_decoder::Clip;
-use mocap_encoder::codec::index;
+use mocap_encoder::codec::{index, pca_spline};
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::units::LengthUnit;
 use mocap_encoder::{bench, bvh, clipfile, fixed, generate, metrics, units};
@@ -50,10 +50,11 @@ enum Command {
         /// Codec.
         #[arg(long, value_enum, default_value = "index")]
         codec: CodecChoice,
-        /// Error bound, repeatable: `1deg` (rotation channels) and/or `8mm`
-        /// (joint positions by forward kinematics).
-        #[arg(long = "max-error", default_value = "1deg")]
-        max_error: Vec<BoundSpec>,
+        /// Error bound, repeatable: `1deg` (rotation channels), `8mm` (max
+        /// joint position error by forward kinematics), `arms:10mm` (mean
+        /// RMS joint error); `+` joins several in one value.
+        #[arg(long = "max-error", default_value = "1deg", value_parser = parse_bounds)]
+        max_error: Vec<Vec<BoundSpec>>,
         /// Length unit of the input (auto: from the skeleton's height).
         #[arg(long, default_value = "auto")]
         units: UnitArg,
@@ -103,9 +104,13 @@ enum Command {
     Bench {
         /// BVH files or folders.
         paths: Vec<PathBuf>,
-        /// Error bounds, repeatable.
+        /// Error bounds, repeatable; `+` joins several into one
+        /// (`50mm+arms:10mm`).
         #[arg(long = "max-error", default_values = ["1deg", "0.25deg"])]
         max_error: Vec<String>,
+        /// Codecs, repeatable (`auto` keeps the smallest per file).
+        #[arg(long, value_enum, default_values = ["index"])]
+        codec: Vec<CodecChoice>,
         /// Write the rows as JSON here too.
         #[arg(long)]
         json: Option<PathBuf>,
@@ -121,6 +126,10 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+}
+
+fn parse_bounds(s: &str) -> Result<Vec<BoundSpec>, String> {
+    s.split('+').map(str::parse).collect()
 }
 
 #[derive(Clone, Debug)]
@@ -208,7 +217,7 @@ fn run(cli: Cli) -> Result<(), String> {
         } => {
             let m = bvh::read_file(&input).map_err(|e| e.to_string())?;
             let unit = resolve_units(&unit_arg, &m);
-            let bound = Bound::from_specs(&max_error);
+            let bound = Bound::from_specs(&max_error.concat());
             eprintln!(
                 "{}: {} frames × {} channels at {:.1} Hz, units {unit}; encoding ({codec:?}, bound {bound})…",
                 input.display(),
@@ -227,7 +236,7 @@ fn run(cli: Cli) -> Result<(), String> {
             let file_bytes = std::fs::metadata(&input).map(|m| m.len()).unwrap_or(0);
             let x = &enc.metrics;
             println!(
-                "{}: {} bytes, ratio {:.2}:1 vs f32 ({:.1}:1 vs file), angle max {:.3}°, rms {:.3}°, joint max {:.2} mm, ARMS {:.2} mm, d {:.2}% (bound {bound} holds; key interval {})",
+                "{}: {} bytes, ratio {:.2}:1 vs f32 ({:.1}:1 vs file), angle max {:.3}°, rms {:.3}°, joint max {:.2} mm, ARMS {:.2} mm, d {:.2}% (bound {bound} holds; {})",
                 output.display(),
                 enc.bytes.len(),
                 x.ratio_f32,
@@ -237,7 +246,10 @@ fn run(cli: Cli) -> Result<(), String> {
                 x.max_joint_err_mm,
                 x.arms_mm,
                 x.distortion_pct,
-                enc.key_interval
+                match enc.codec {
+                    CodecChoice::Index => format!("index, key interval {}", enc.key_interval),
+                    c => bench::codec_name(c).to_string(),
+                }
             );
             if let Some(kind) = emit {
                 let p = emit_source(kind, &output, &enc.bytes)?;
@@ -331,14 +343,11 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Bench {
             paths,
             max_error,
+            codec,
             json,
             plot,
         } => {
-            let specs = max_error
-                .iter()
-                .map(|s| s.parse::<BoundSpec>())
-                .collect::<Result<Vec<_>, _>>()?;
-            let rows = bench::run(&paths, &specs, &max_error)?;
+            let rows = bench::run(&paths, &codec, &max_error)?;
             print!("{}", bench::markdown(&rows));
             if let Some(p) = json {
                 write(
@@ -416,6 +425,29 @@ fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
                             ch.max
                         );
                     }
+                }
+            }
+        }
+        if sec.id == mocap_decoder::consts::SECTION_CODEC_PCA_SPLINE {
+            if let Some(info) = pca_spline::inspect(sec.bytes) {
+                let keys: usize = info
+                    .segments
+                    .iter()
+                    .flat_map(|(_, _, g)| g.iter().map(|&(_, m)| m))
+                    .sum();
+                s += &format!(
+                    "  pca-spline codec: {} groups, {} constant channels, {} segments, {keys} keys\n  bytes: means {}, bases {}, keys {}, patches {}\n",
+                    info.groups,
+                    info.consts,
+                    info.segments.len(),
+                    info.mean_bytes,
+                    info.basis_bytes,
+                    info.key_bytes,
+                    info.patch_bytes
+                );
+                for (start, end, groups) in &info.segments {
+                    let g: Vec<String> = groups.iter().map(|(k, m)| format!("k{k}/{m}")).collect();
+                    s += &format!("  segment {start}..={end}: {}\n", g.join(" "));
                 }
             }
         }

@@ -7,19 +7,22 @@ use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, clipfile, fixed, metrics, units};
 use mocap_tests::corpus_files;
 
-fn roundtrip(folder: &str, bound: &str) {
+/// Encodes every file of `folder` with `codec` at `bound` (`+`-joined
+/// specs) and returns the aggregate ratio (total f32 bytes / total clip
+/// bytes).
+fn roundtrip(folder: &str, codec: CodecChoice, bound: &str) -> f64 {
     let Some(files) = corpus_files(folder) else {
-        return;
+        return f64::NAN;
     };
     assert!(!files.is_empty(), "no .bvh files in {folder}");
-    let spec: BoundSpec = bound.parse().unwrap();
-    let b = Bound::from_specs(&[spec]);
+    let specs: Vec<BoundSpec> = bound.split('+').map(|s| s.parse().unwrap()).collect();
+    let b = Bound::from_specs(&specs);
     let (mut raw, mut clips) = (0usize, 0usize);
     for file in &files {
         let m = bvh::read_file(file).unwrap();
         let unit = units::detect(&m);
         let opts = EncodeOptions {
-            codec: CodecChoice::Index,
+            codec,
             bound: b,
             metres_per_unit: unit.metres(),
             key_interval: None,
@@ -37,50 +40,98 @@ fn roundtrip(folder: &str, bound: &str) {
             file.display()
         );
         assert!(b.holds(&x), "{} at {bound}: {x:?}", file.display());
-        match spec {
-            BoundSpec::Degrees(d) => assert!(x.angle_max_deg <= d),
-            BoundSpec::Millimetres(mm) => assert!(x.max_joint_err_mm <= mm),
+        for spec in &specs {
+            match *spec {
+                BoundSpec::Degrees(d) => assert!(x.angle_max_deg <= d),
+                BoundSpec::Millimetres(mm) => assert!(x.max_joint_err_mm <= mm),
+                BoundSpec::Arms(mm) => assert!(x.arms_mm <= mm),
+            }
         }
         raw += m.frames() * m.channels() * 4;
         clips += enc.bytes.len();
         eprintln!(
-            "{folder}/{} @ {bound}: {} bytes, ratio {:.2}, angle max {:.3}°, joint max {:.2} mm",
+            "{folder}/{} {codec:?} @ {bound}: {} bytes, ratio {:.2}, angle max {:.3}°, joint max {:.2} mm, ARMS {:.2} mm",
             file.file_name().unwrap().to_string_lossy(),
             enc.bytes.len(),
             x.ratio_f32,
             x.angle_max_deg,
-            x.max_joint_err_mm
+            x.max_joint_err_mm,
+            x.arms_mm
         );
     }
-    eprintln!(
-        "{folder} @ {bound}: aggregate ratio {:.2}",
-        raw as f64 / clips as f64
-    );
+    let ratio = raw as f64 / clips as f64;
+    eprintln!("{folder} {codec:?} @ {bound}: aggregate ratio {ratio:.2}");
+    ratio
 }
 
 #[test]
 fn cmu_at_1deg() {
-    roundtrip("cmu", "1deg");
+    roundtrip("cmu", CodecChoice::Index, "1deg");
 }
 
 #[test]
 fn cmu_at_quarter_deg() {
-    roundtrip("cmu", "0.25deg");
+    roundtrip("cmu", CodecChoice::Index, "0.25deg");
 }
 
 #[test]
 fn cmu_at_20mm() {
-    roundtrip("cmu", "20mm");
+    roundtrip("cmu", CodecChoice::Index, "20mm");
 }
 
 #[test]
 fn iclone_at_1deg() {
-    roundtrip("iclone-cmu", "1deg");
+    roundtrip("iclone-cmu", CodecChoice::Index, "1deg");
 }
 
 #[test]
 fn iclone_at_20mm() {
-    roundtrip("iclone-cmu", "20mm");
+    roundtrip("iclone-cmu", CodecChoice::Index, "20mm");
+}
+
+#[test]
+fn pca_spline_cmu_at_50mm_and_arms_10mm() {
+    // Issue 3's operating point. Measured 39.2:1 (BENCHMARKS.md); the
+    // guard catches regressions, the target (50:1) is reported, not
+    // asserted.
+    let r = roundtrip("cmu", CodecChoice::PcaSpline, "50mm+arms:10mm");
+    assert!(r.is_nan() || r >= 35.0, "aggregate ratio {r:.2}");
+}
+
+#[test]
+fn pca_spline_cmu_at_1deg() {
+    roundtrip("cmu", CodecChoice::PcaSpline, "1deg");
+}
+
+#[test]
+fn pca_spline_iclone_at_50mm_and_arms_10mm() {
+    let r = roundtrip("iclone-cmu", CodecChoice::PcaSpline, "50mm+arms:10mm");
+    assert!(r.is_nan() || r >= 22.0, "aggregate ratio {r:.2}");
+}
+
+#[test]
+fn auto_picks_the_smaller_codec() {
+    let Some(files) = corpus_files("cmu") else {
+        return;
+    };
+    let m = bvh::read_file(&files[0]).unwrap();
+    let bound = Bound::from_specs(&["50mm".parse().unwrap()]);
+    let size = |codec| {
+        let opts = EncodeOptions {
+            codec,
+            bound,
+            metres_per_unit: units::detect(&m).metres(),
+            key_interval: None,
+        };
+        encode::encode(&m, &opts).unwrap()
+    };
+    let auto = size(CodecChoice::Auto);
+    let best = size(CodecChoice::Index)
+        .bytes
+        .len()
+        .min(size(CodecChoice::PcaSpline).bytes.len());
+    assert_eq!(auto.bytes.len(), best);
+    assert_ne!(auto.codec, CodecChoice::Auto);
 }
 
 #[test]

@@ -32,8 +32,17 @@ fn reseal(mut v: Vec<u8>) -> Vec<u8> {
 }
 
 fn encode_at(m: &mocap_encoder::motion::Motion, bound: &str, key_interval: Option<u16>) -> Vec<u8> {
+    encode_with(m, CodecChoice::Index, bound, key_interval)
+}
+
+fn encode_with(
+    m: &mocap_encoder::motion::Motion,
+    codec: CodecChoice,
+    bound: &str,
+    key_interval: Option<u16>,
+) -> Vec<u8> {
     let opts = EncodeOptions {
-        codec: CodecChoice::Index,
+        codec,
         bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),
         key_interval,
@@ -103,4 +112,25 @@ fn corpus_clip_mutants_never_panic() {
     let clip = encode_at(&m, "1deg", Some(16));
     let (ok, err) = hammer("35_17", &clip, 3000, 0xC0FFEE);
     eprintln!("35_17: {ok} decoded, {err} rejected");
+}
+
+#[test]
+fn pca_spline_mutants_never_panic() {
+    let m = generate::animatronic_demo();
+    let clip = encode_with(&m, CodecChoice::PcaSpline, "1deg", None);
+    let (ok, err) = hammer("demo pca-spline", &clip, 3000, 0xB1E5);
+    eprintln!("demo pca-spline: {ok} decoded, {err} rejected");
+    assert!(err > 0);
+    let Some(files) = corpus_files("cmu") else {
+        return;
+    };
+    let file = files
+        .iter()
+        .find(|p| p.ends_with("16_07.bvh"))
+        .unwrap_or(&files[0]);
+    let m = bvh::read_file(file).unwrap();
+    // Segments, blends and patches all occur in this clip.
+    let clip = encode_with(&m, CodecChoice::PcaSpline, "50mm", None);
+    let (ok, err) = hammer("16_07 pca-spline", &clip, 3000, 0xFACE);
+    eprintln!("16_07 pca-spline: {ok} decoded, {err} rejected");
 }

@@ -1,4 +1,4 @@
-//! Every example of SPEC.md §6 is read out of SPEC.md itself and checked:
+//! Every example of SPEC.md §7 is read out of SPEC.md itself and checked:
 //! the decoder decodes it to the stated values, `sample_at` gives the stated
 //! interpolation, the encoder's container writer reproduces the exact bytes,
 //! and any single flipped bit is rejected.
@@ -57,7 +57,7 @@ fn examples() -> Vec<Example> {
 
 #[test]
 fn spec_has_examples() {
-    assert!(examples().len() >= 2, "SPEC.md §6 examples not found");
+    assert!(examples().len() >= 2, "SPEC.md §7 examples not found");
 }
 
 #[test]

@@ -6,6 +6,7 @@
 
 use mocap_decoder::consts::index::{ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS};
 
+use super::bits::BitWriter;
 use super::quantizer::{self, Codebook};
 
 /// Key-frame intervals the encoder tries when none is forced
@@ -275,33 +276,6 @@ fn entry(channel: usize, cb: &Codebook, table: u16, accumulate: bool) -> Entry {
         accumulate,
         table,
         base: cb.base,
-    }
-}
-
-/// Little-endian, LSB-first bit writer (SPEC.md §4.4).
-#[derive(Default)]
-pub struct BitWriter {
-    bytes: Vec<u8>,
-    bit: u64,
-}
-
-impl BitWriter {
-    /// Appends the low `n` bits of `v`.
-    pub fn write(&mut self, v: u32, n: u8) {
-        for i in 0..n {
-            if self.bit.is_multiple_of(8) {
-                self.bytes.push(0);
-            }
-            if (v >> i) & 1 != 0 {
-                *self.bytes.last_mut().expect("pushed above") |= 1 << (self.bit % 8);
-            }
-            self.bit += 1;
-        }
-    }
-
-    /// The bytes written, the last one zero-padded.
-    pub fn finish(self) -> Vec<u8> {
-        self.bytes
     }
 }
 

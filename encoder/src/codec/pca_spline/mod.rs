@@ -1,0 +1,436 @@
+//! The `pca-spline` codec (SPEC.md §5) after Liu & McMillan (SCA 2006):
+//! segments found by PPCA, per-segment weighted PCA of the body channels,
+//! adaptive key frames on the component coefficients, root translation and
+//! heading as separate key-framed curves, blending across segment borders.
+//!
+//! All thresholds derive from one tolerance `τ` in weighted units (the
+//! caller's channel weights turn channel errors into millimetres or
+//! degrees): PCA keeps components until every frame's residual is under
+//! `pca_share·τ`, keys are added until the spline error is under
+//! `key_share·τ`, and key values are quantised so their error stays near
+//! `quant_share·τ`. The encode pipeline (encode.rs) measures the decoded
+//! clip and moves `τ` until the bound holds.
+
+pub mod keys;
+pub mod pca;
+pub mod section;
+pub mod segment;
+
+use mocap_decoder::consts::pca::{
+    MAX_COMPONENTS, MAX_MEAN_SHIFT, MAX_SEGMENT_FRAMES, MAX_VALUE_BITS, MAX_VALUE_SHIFT,
+};
+
+pub use section::{inspect, SectionInfo};
+pub use segment::Ppca;
+
+/// Encoder parameters; [`Params::new`] gives the defaults.
+#[derive(Clone, Debug)]
+pub struct Params {
+    /// `τ`, in weighted units.
+    pub tolerance: f64,
+    /// Share of `τ` left to the PCA residual.
+    pub pca_share: f64,
+    /// Share of `τ` left to the spline.
+    pub key_share: f64,
+    /// Share of `τ` left to key-value quantisation.
+    pub quant_share: f64,
+    /// Most components per group and segment.
+    pub max_components: usize,
+    /// PPCA segmentation; `None` keeps one segment between jumps.
+    pub ppca: Option<Ppca>,
+    /// Frames blended across a PPCA cut (`h` of the paper; 0 = none).
+    pub blend: usize,
+    /// A step this many times the median step is a jump.
+    pub jump_ratio: f64,
+    /// Share of `τ` above which a one-frame spike is taken out of the
+    /// smooth model, and above which a decoded value gets a patch.
+    pub patch_share: f64,
+}
+
+impl Params {
+    /// Defaults for a clip at `fps`: the paper's segmentation values scaled
+    /// from 120 Hz, a blend of 10 frames at 120 Hz.
+    pub fn new(tolerance: f64, fps: f64) -> Params {
+        Params {
+            tolerance,
+            pca_share: 0.6,
+            key_share: 0.75,
+            quant_share: 0.25,
+            max_components: usize::from(MAX_COMPONENTS),
+            ppca: Some(Ppca::paper(fps)),
+            blend: ((10.0 * fps / 120.0).round() as usize).max(1),
+            jump_ratio: 10.0,
+            patch_share: 1.0,
+        }
+    }
+}
+
+/// What to code: channel-major fixed-point values, a weight per channel
+/// (error units per fixed-point unit) and the channel groups, each with
+/// its own PCA and key frames (a one-channel group is a plain key-framed
+/// curve: root translation and heading). Every channel should be in one
+/// group; constant channels are taken out of their group.
+pub struct Input<'a> {
+    /// `values[channel][frame]`.
+    pub values: &'a [Vec<i32>],
+    /// Weight of each channel.
+    pub weights: &'a [f64],
+    /// Channel groups.
+    pub groups: &'a [Vec<usize>],
+}
+
+/// The model of one clip, ready to be written (SPEC.md §5).
+#[derive(Clone, Debug, Default)]
+pub struct Model {
+    /// Channel lists of the groups.
+    pub groups: Vec<Vec<usize>>,
+    /// Constant channels and their values.
+    pub consts: Vec<(usize, i32)>,
+    /// Segments in order.
+    pub segments: Vec<SegmentModel>,
+}
+
+/// One segment.
+#[derive(Clone, Debug)]
+pub struct SegmentModel {
+    /// First frame.
+    pub start: u32,
+    /// Last frame (inclusive); past the next segment's start when blending.
+    pub end: u32,
+    /// One entry per group, in group order.
+    pub groups: Vec<GroupModel>,
+    /// Sparse corrections: (frame relative to `start`, channel, value),
+    /// sorted (SPEC.md §5.5).
+    pub patches: Vec<(u32, usize, i32)>,
+}
+
+/// One group in one segment.
+#[derive(Clone, Debug, Default)]
+pub struct GroupModel {
+    /// Components.
+    pub k: usize,
+    /// Means are stored `>> mean_shift`.
+    pub mean_shift: u8,
+    /// Stored means, one per channel.
+    pub mean: Vec<i16>,
+    /// `n × k` basis.
+    pub basis: Vec<i8>,
+    /// Key times, relative to the segment start.
+    pub times: Vec<u32>,
+    /// Per component: bit width, shift, offset.
+    pub comps: Vec<(u8, u8, i32)>,
+    /// `m × k` codes.
+    pub codes: Vec<u32>,
+}
+
+/// Builds the model of a clip.
+pub fn model(input: &Input<'_>, p: &Params) -> Result<Model, String> {
+    let channels = input.values.len();
+    let frames = input.values.first().map_or(0, Vec::len);
+    if frames == 0 {
+        return Err("no frames".into());
+    }
+    // Model the motion without its one-frame spikes; patches restore them.
+    let clean: Vec<Vec<i32>> = input
+        .values
+        .iter()
+        .zip(input.weights)
+        .map(|(v, &w)| despike(v, w, p.patch_share * p.tolerance))
+        .collect();
+    let input = &Input {
+        values: &clean,
+        weights: input.weights,
+        groups: input.groups,
+    };
+    let constant = |c: usize| input.values[c].iter().all(|&x| x == input.values[c][0]);
+    let mut consts: Vec<(usize, i32)> = (0..channels)
+        .filter(|&c| constant(c) || !input.groups.iter().any(|g| g.contains(&c)))
+        .map(|c| (c, input.values[c][0]))
+        .collect();
+    consts.sort_unstable();
+    let groups: Vec<Vec<usize>> = input
+        .groups
+        .iter()
+        .map(|g| {
+            let mut g: Vec<usize> = g.iter().copied().filter(|&c| !constant(c)).collect();
+            g.sort_unstable();
+            g
+        })
+        .filter(|g| !g.is_empty())
+        .collect();
+    // Segmentation looks at the pose, not at the separate curves.
+    let mut body: Vec<usize> = groups
+        .iter()
+        .filter(|g| g.len() > 1)
+        .flatten()
+        .copied()
+        .collect();
+    body.sort_unstable();
+    let starts = segment_starts(input, &body, frames, p);
+    let ends = segment_ends(&starts, frames, p.blend);
+    let mut segments = Vec::with_capacity(starts.len());
+    for (&(start, _), &end) in starts.iter().zip(&ends) {
+        let groups = groups
+            .iter()
+            .map(|g| fit_group(input, g, start, end, p))
+            .collect::<Result<Vec<_>, String>>()?;
+        segments.push(SegmentModel {
+            start: start as u32,
+            end: end as u32,
+            groups,
+            patches: Vec::new(),
+        });
+    }
+    Ok(Model {
+        groups,
+        consts,
+        segments,
+    })
+}
+
+/// `v` with every one-frame spike (a frame off its neighbours' mean by
+/// more than `tol` weighted units while the neighbours agree better with
+/// each other) replaced by that mean.
+fn despike(v: &[i32], w: f64, tol: f64) -> Vec<i32> {
+    let mut out = v.to_vec();
+    for f in 1..v.len().saturating_sub(1) {
+        let (a, x, b) = (f64::from(v[f - 1]), f64::from(v[f]), f64::from(v[f + 1]));
+        let mid = (a + b) / 2.0;
+        let dev = ((x - mid) * w).abs();
+        if dev > tol && ((b - a) * w).abs() < dev {
+            out[f] = mid.round() as i32;
+        }
+    }
+    out
+}
+
+/// Segment starts, each with whether it follows a jump (no blending).
+fn segment_starts(
+    input: &Input<'_>,
+    body: &[usize],
+    frames: usize,
+    p: &Params,
+) -> Vec<(usize, bool)> {
+    let weighted = |chs: &[usize]| -> Vec<f64> {
+        (0..frames)
+            .flat_map(|f| {
+                chs.iter()
+                    .map(move |&c| f64::from(input.values[c][f]) * input.weights[c])
+            })
+            .collect()
+    };
+    // Jumps of the body pose (the root travels steadily, so its steps
+    // would hide them).
+    let y = weighted(body);
+    let jumps = segment::jumps(&y, body.len(), p.jump_ratio, 4.0 * p.tolerance);
+    let mut starts = vec![(0usize, true)];
+    starts.extend(jumps.iter().map(|&j| (j, true)));
+    let mut out = Vec::new();
+    for (i, &(s, jump)) in starts.iter().enumerate() {
+        let e = starts.get(i + 1).map_or(frames, |&(n, _)| n);
+        out.push((s, jump));
+        let mut cuts = match &p.ppca {
+            Some(pp) if !body.is_empty() => segment::ppca_cuts(&y, body.len(), s, e, pp),
+            _ => Vec::new(),
+        };
+        // Respect the format's longest segment.
+        let max = MAX_SEGMENT_FRAMES as usize - p.blend - 2;
+        let mut last = s;
+        cuts.push(e);
+        for c in cuts {
+            while c - last > max {
+                last += max;
+                out.push((last, false));
+            }
+            if c < e {
+                out.push((c, false));
+            }
+            last = c;
+        }
+    }
+    out
+}
+
+/// Last frame of each segment: just before the next start after a jump,
+/// `blend` frames past it after a PPCA cut, never so far that two blend
+/// windows touch (SPEC.md §5.2).
+fn segment_ends(starts: &[(usize, bool)], frames: usize, blend: usize) -> Vec<usize> {
+    (0..starts.len())
+        .map(|i| match starts.get(i + 1) {
+            None => frames - 1,
+            Some(&(next, jump)) => {
+                let mut end = next - 1;
+                if !jump && blend > 0 {
+                    end = next + blend - 1;
+                    if let Some(&(after, _)) = starts.get(i + 2) {
+                        end = end.min(after.saturating_sub(2)).max(next - 1);
+                    }
+                    end = end.min(frames - 1);
+                }
+                end
+            }
+        })
+        .collect()
+}
+
+fn fit_group(
+    input: &Input<'_>,
+    chans: &[usize],
+    start: usize,
+    end: usize,
+    p: &Params,
+) -> Result<GroupModel, String> {
+    let n = chans.len();
+    let len = end - start + 1;
+    let w: Vec<f64> = chans.iter().map(|&c| input.weights[c]).collect();
+    // Means, stored as i16 << shift.
+    let means: Vec<f64> = chans
+        .iter()
+        .map(|&c| {
+            input.values[c][start..=end]
+                .iter()
+                .map(|&v| f64::from(v))
+                .sum::<f64>()
+                / len as f64
+        })
+        .collect();
+    let peak = means.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut shift = 0u8;
+    while shift < MAX_MEAN_SHIFT && (peak / f64::from(1u32 << shift)).round() > 32767.0 {
+        shift += 1;
+    }
+    let mean: Vec<i16> = means
+        .iter()
+        .map(|m| {
+            (m / f64::from(1u32 << shift))
+                .round()
+                .clamp(-32768.0, 32767.0) as i16
+        })
+        .collect();
+    let mq: Vec<f64> = mean
+        .iter()
+        .map(|&m| f64::from(i32::from(m) << shift))
+        .collect();
+    let mut g = GroupModel {
+        k: 0,
+        mean_shift: shift,
+        mean,
+        ..GroupModel::default()
+    };
+    if len < 2 {
+        return Ok(g);
+    }
+    let x: Vec<f64> = (start..=end)
+        .flat_map(|f| {
+            let mq = &mq;
+            chans
+                .iter()
+                .enumerate()
+                .map(move |(i, &c)| f64::from(input.values[c][f]) - mq[i])
+        })
+        .collect();
+    let fit = pca::fit(&x, n, &w, p.pca_share * p.tolerance, p.max_components);
+    let k = fit.k;
+    if k == 0 {
+        return Ok(g);
+    }
+    let gram = fit.gram.clone();
+    let (times, controls) = keys::select(&fit.coef, k, p.key_share * p.tolerance, |d| {
+        pca::weighted_norm(&gram, d)
+    });
+    // Quantisation step per component: equal shares of quant_share·τ.
+    let limit = f64::from(i32::MAX) / (128.0 * k as f64) / 2.0;
+    let m = times.len();
+    let mut comps = Vec::with_capacity(k);
+    let mut codes = vec![0u32; m * k];
+    for j in 0..k {
+        let gj = fit.gram[j * k + j].sqrt().max(1e-300);
+        let step = p.quant_share * p.tolerance * 12f64.sqrt() / (gj * (k as f64).sqrt());
+        let s = step
+            .max(1.0)
+            .log2()
+            .floor()
+            .clamp(0.0, f64::from(MAX_VALUE_SHIFT)) as u8;
+        let unit = f64::from(1u32 << s);
+        let col: Vec<i64> = (0..m)
+            .map(|r| (controls[r * k + j] / unit).round() as i64)
+            .collect();
+        let lo = *col.iter().min().unwrap_or(&0);
+        let hi = *col.iter().max().unwrap_or(&0);
+        if (lo as f64 * unit).abs() > limit || (hi as f64 * unit).abs() > limit {
+            return Err(format!(
+                "component coefficient {} out of range for channels {chans:?}",
+                lo.abs().max(hi.abs()) as f64 * unit
+            ));
+        }
+        let span = (hi - lo) as u64;
+        let width = 64 - span.leading_zeros() as u8;
+        if width > MAX_VALUE_BITS {
+            return Err("key value range too wide".into());
+        }
+        comps.push((width, s, (lo << s) as i32));
+        for r in 0..m {
+            codes[r * k + j] = (col[r] - lo) as u32;
+        }
+    }
+    g.k = k;
+    g.basis = fit.basis;
+    g.times = times;
+    g.comps = comps;
+    g.codes = codes;
+    Ok(g)
+}
+
+impl Model {
+    /// Adds a patch wherever the decoded value (`decoded[channel][frame]`,
+    /// from the real decoder) misses the input by more than `tol` weighted
+    /// units; returns how many were added. Each patch goes to the segment
+    /// whose own range (up to the next start) holds its frame.
+    pub fn add_patches(&mut self, input: &Input<'_>, decoded: &[Vec<i32>], tol: f64) -> usize {
+        let mut added = 0;
+        let starts: Vec<u32> = self.segments.iter().map(|s| s.start).collect();
+        for (c, (orig, dec)) in input.values.iter().zip(decoded).enumerate() {
+            for (f, (&o, &d)) in orig.iter().zip(dec).enumerate() {
+                let err = f64::from(o) - f64::from(d);
+                if (err * input.weights[c]).abs() <= tol || err == 0.0 {
+                    continue;
+                }
+                let s = starts.partition_point(|&st| st as usize <= f) - 1;
+                let seg = &mut self.segments[s];
+                let rel = f as u32 - seg.start;
+                let delta =
+                    (i64::from(o) - i64::from(d)).clamp(i32::MIN.into(), i32::MAX.into()) as i32;
+                match seg
+                    .patches
+                    .binary_search_by_key(&(rel, c), |&(r, ch, _)| (r, ch))
+                {
+                    Ok(i) => seg.patches[i].2 = seg.patches[i].2.wrapping_add(delta),
+                    Err(i) => seg.patches.insert(i, (rel, c, delta)),
+                }
+                added += 1;
+            }
+        }
+        added
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ends_leave_blend_windows_apart() {
+        let starts = [
+            (0, true),
+            (1, true),
+            (100, false),
+            (105, false),
+            (300, false),
+        ];
+        let ends = segment_ends(&starts, 400, 10);
+        assert_eq!(ends, vec![0, 103, 114, 309, 399]);
+        for j in 0..starts.len() - 2 {
+            assert!(ends[j] + 2 <= starts[j + 2].0);
+        }
+    }
+}
