@@ -13,5 +13,6 @@ pub mod kinematics;
 pub mod metrics;
 pub mod motion;
 pub mod plot;
+pub mod rig;
 pub mod track;
 pub mod units;

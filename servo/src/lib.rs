@@ -1,0 +1,62 @@
+//! Servo outputs and serial streaming for mocap clips, shared by the firmware
+//! and the host CLI (`mocap play`, `mocap send`). `no_std`, no allocation,
+//! no panics.
+//!
+//! # Units
+//!
+//! Every pulse width is a `u16` in **quarter microseconds** (0.25 µs), the
+//! Pololu Maestro's native unit: 1500 µs is `6000`, and `u16` reaches
+//! 16 383.75 µs, far beyond any servo. Each output converts from it:
+//! PWM duty cycles ([`bank`]), PCA9685 counts of 4.88 µs (`pca9685`),
+//! Maestro targets as they are ([`maestro`]), SSC-32 whole µs ([`ssc32`]).
+//!
+//! # Flow
+//!
+//! ```text
+//! decoded frame / streamed Pose ──► Limiter::apply ──► ServoBank::write     (PWM)
+//!                                   (clamp, speed)  ├► Pca9685Servos::write (I²C)
+//!                                                   ├► maestro::set_multiple_targets (UART)
+//!                                                   └► ssc32::group_move              (UART)
+//! ```
+//!
+//! Every output should take its pulses from a [`Limiter`]: it is what
+//! guarantees that no pulse outside a servo's limits is ever commanded.
+//!
+//! # Features
+//!
+//! - `std`: `std::error::Error` for the errors.
+//! - `defmt`: `defmt::Format` for the errors and limits.
+//! - `pca9685`: the PCA9685 output (`pwm-pca9685` driver).
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::indexing_slicing,
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic
+    )
+)]
+
+#[cfg(feature = "std")]
+extern crate std;
+
+pub mod bank;
+mod error;
+pub mod limits;
+pub mod maestro;
+#[cfg(feature = "pca9685")]
+pub mod pca9685;
+pub mod ssc32;
+pub mod stream;
+#[cfg(test)]
+mod test_rng;
+
+pub use bank::ServoBank;
+pub use error::{Error, OutputError};
+pub use limits::{Limiter, ServoLimits};
+#[cfg(feature = "pca9685")]
+pub use pca9685::Pca9685Servos;
+pub use stream::{decode_frame, encode_frame, FrameReceiver, Message};

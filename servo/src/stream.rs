@@ -1,0 +1,522 @@
+//! Serial streaming between the host (`mocap send`) and the MCU.
+//!
+//! # Frame
+//!
+//! ```text
+//! frame   = COBS(payload) 0x00
+//! payload = message crc
+//! message = postcard encoding of a `Message`
+//! crc     = CRC-32/ISO-HDLC of `message`, 4 bytes little-endian
+//! ```
+//!
+//! COBS leaves no `0x00` inside a frame, so `0x00` only ends frames: a
+//! receiver that loses bytes or joins mid-stream drops at most the frame it
+//! is in and is back in step at the next `0x00`. Empty frames (`0x00 0x00`)
+//! are ignored, so a sender may start with a lone `0x00` to flush a
+//! half-received frame. A frame is accepted only if it is valid COBS, its CRC
+//! matches and `message` is exactly one valid message (no trailing bytes);
+//! otherwise it is dropped and counted.
+//!
+//! # Message (postcard)
+//!
+//! The first byte is the variant index (postcard varint); integers `u16` and
+//! `u32` are LEB128 varints, `u8` one byte, `bool` one byte `0x00`/`0x01`,
+//! byte strings and vectors a varint length then the elements.
+//!
+//! | tag | message     | direction  | fields, in order                                        |
+//! |-----|-------------|------------|---------------------------------------------------------|
+//! | 0   | `Hello`     | host → MCU | `version: u8` ([`PROTOCOL_VERSION`])                     |
+//! | 1   | `ClipChunk` | host → MCU | `offset: u32`, `total: u32`, `bytes: [u8]` (≤ 64)       |
+//! | 2   | `Play`      | host → MCU | `loop_: bool`                                           |
+//! | 3   | `Pose`      | host → MCU | `seq: u16`, `pulses: [u16]` (≤ 32, quarter-µs)          |
+//! | 4   | `Stop`      | host → MCU | —                                                       |
+//! | 5   | `Status`    | MCU → host | `received: u32`, `dropped: u32`, `last_seq: u16`, `state: u8` |
+//!
+//! A message is at most [`MAX_MESSAGE_LEN`] bytes (a `Pose` of 32 pulses of
+//! 3-byte varints) and a frame at most [`MAX_FRAME_LEN`] bytes with its
+//! delimiter; `FrameReceiver<{ MAX_FRAME_LEN }>` holds any frame.
+
+use serde::{Deserialize, Serialize};
+
+use crate::Error;
+
+/// Version carried by `Hello`; bumped on any change of this wire format.
+pub const PROTOCOL_VERSION: u8 = 1;
+/// Frame delimiter.
+pub const DELIMITER: u8 = 0x00;
+/// Most bytes one `ClipChunk` carries.
+pub const MAX_CHUNK_LEN: usize = 64;
+/// Most pulses one `Pose` carries.
+pub const MAX_POSE_SERVOS: usize = 32;
+/// Bytes of the CRC after the message.
+pub const CRC_LEN: usize = 4;
+/// Longest postcard message: `Pose` with tag, 3-byte `seq`, length and 32
+/// pulses of 3 bytes each.
+pub const MAX_MESSAGE_LEN: usize = 1 + 3 + 1 + 3 * MAX_POSE_SERVOS;
+/// Longest frame: COBS of the longest payload plus the delimiter.
+pub const MAX_FRAME_LEN: usize = cobs::max_encoding_length(MAX_MESSAGE_LEN + CRC_LEN) + 1;
+
+const CRC32: crc::Crc<u32, crc::NoTable> =
+    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+
+/// One message of the serial protocol. The variant order is the wire tag:
+/// never reorder, only append (and bump [`PROTOCOL_VERSION`]).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Message<'a> {
+    /// Opens a session; either side may send it.
+    Hello {
+        /// [`PROTOCOL_VERSION`] of the sender.
+        version: u8,
+    },
+    /// A piece of a `.mcb` clip for the MCU's RAM buffer.
+    ClipChunk {
+        /// Byte offset of `bytes` in the clip.
+        offset: u32,
+        /// Length of the whole clip.
+        total: u32,
+        /// At most [`MAX_CHUNK_LEN`] bytes of the clip.
+        bytes: &'a [u8],
+    },
+    /// Plays the uploaded clip.
+    Play {
+        /// Restart at the end instead of stopping.
+        loop_: bool,
+    },
+    /// A live pose: one pulse per servo, applied at once (through the limits).
+    Pose {
+        /// Sender's sequence number, wrapping; gaps show lost poses.
+        seq: u16,
+        /// Pulses in quarter-µs, servo 0 first.
+        pulses: heapless::Vec<u16, MAX_POSE_SERVOS>,
+    },
+    /// Stops playback; the MCU parks the servos at neutral.
+    Stop,
+    /// The MCU's report.
+    Status {
+        /// Frames accepted.
+        received: u32,
+        /// Frames dropped as corrupt.
+        dropped: u32,
+        /// `seq` of the last `Pose` applied.
+        last_seq: u16,
+        /// Player state, defined by the firmware.
+        state: u8,
+    },
+}
+
+/// Encodes `message` as one complete frame (delimiter included) into `buf`
+/// and returns its length, at most [`MAX_FRAME_LEN`].
+pub fn encode_frame(message: &Message<'_>, buf: &mut [u8]) -> Result<usize, Error> {
+    check_chunk(message)?;
+    let mut payload = [0u8; MAX_MESSAGE_LEN + CRC_LEN];
+    // Every message that passed check_chunk fits MAX_MESSAGE_LEN.
+    let message_len = postcard::to_slice(message, &mut payload)
+        .map_err(|_| Error::FrameMessage)?
+        .len();
+    let (message_bytes, rest) = payload.split_at_mut(message_len);
+    let crc = CRC32.checksum(message_bytes).to_le_bytes();
+    rest.get_mut(..CRC_LEN)
+        .ok_or(Error::FrameMessage)?
+        .copy_from_slice(&crc);
+    let payload = payload.get(..message_len + CRC_LEN).unwrap_or_default();
+
+    let needed = cobs::max_encoding_length(payload.len()) + 1;
+    let available = buf.len();
+    let too_small = Error::BufferTooSmall { needed, available };
+    let encoded_len = cobs::try_encode(payload, buf).map_err(|_| too_small)?;
+    *buf.get_mut(encoded_len).ok_or(too_small)? = DELIMITER;
+    Ok(encoded_len + 1)
+}
+
+/// Decodes one frame, with or without its final delimiter, in place; the
+/// message borrows `frame`.
+pub fn decode_frame(frame: &mut [u8]) -> Result<Message<'_>, Error> {
+    let frame = match frame {
+        [body @ .., DELIMITER] => body,
+        body => body,
+    };
+    if frame.contains(&DELIMITER) {
+        return Err(Error::FrameCobs);
+    }
+    let decoded_len = cobs::decode_in_place(frame).map_err(|_| Error::FrameCobs)?;
+    let decoded = frame.get(..decoded_len).ok_or(Error::FrameCobs)?;
+    let too_short = Error::FrameTooShort { len: decoded_len };
+    let (message_bytes, crc) = decoded.split_last_chunk::<CRC_LEN>().ok_or(too_short)?;
+    if message_bytes.is_empty() {
+        return Err(too_short);
+    }
+    let stored = u32::from_le_bytes(*crc);
+    let computed = CRC32.checksum(message_bytes);
+    if stored != computed {
+        return Err(Error::FrameCrcMismatch { stored, computed });
+    }
+    match postcard::take_from_bytes::<Message<'_>>(message_bytes) {
+        Ok((message, [])) => {
+            check_chunk(&message)?;
+            Ok(message)
+        }
+        _ => Err(Error::FrameMessage),
+    }
+}
+
+fn check_chunk(message: &Message<'_>) -> Result<(), Error> {
+    match message {
+        Message::ClipChunk { bytes, .. } if bytes.len() > MAX_CHUNK_LEN => {
+            Err(Error::ChunkTooLong {
+                len: bytes.len(),
+                max: MAX_CHUNK_LEN,
+            })
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Receives frames from a byte stream (a UART) into a fixed buffer of `CAP`
+/// encoded bytes; `CAP = MAX_FRAME_LEN` holds every valid frame.
+///
+/// Each completed frame yields its message, borrowing the receiver until the
+/// next byte is fed, or the error for which it was dropped. Corrupt frames are
+/// counted and reception resumes after the next delimiter.
+///
+/// ```
+/// use mocap_servo::stream::{encode_frame, FrameReceiver, Message, MAX_FRAME_LEN};
+///
+/// let mut wire = [0u8; MAX_FRAME_LEN];
+/// let n = encode_frame(&Message::Play { loop_: true }, &mut wire).unwrap();
+///
+/// let mut rx = FrameReceiver::<MAX_FRAME_LEN>::new();
+/// let mut input = &wire[..n];
+/// while !input.is_empty() {
+///     let (frame, rest) = rx.feed(input);
+///     if let Some(Ok(message)) = frame {
+///         assert_eq!(message, Message::Play { loop_: true });
+///     }
+///     input = rest;
+/// }
+/// assert_eq!((rx.received(), rx.dropped()), (1, 0));
+/// ```
+#[derive(Debug, Clone)]
+pub struct FrameReceiver<const CAP: usize> {
+    buf: [u8; CAP],
+    len: usize,
+    overflowed: bool,
+    received: u32,
+    dropped: u32,
+}
+
+impl<const CAP: usize> Default for FrameReceiver<CAP> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const CAP: usize> FrameReceiver<CAP> {
+    /// An empty receiver (`const`, so it can live in a `static`).
+    pub const fn new() -> Self {
+        FrameReceiver {
+            buf: [0; CAP],
+            len: 0,
+            overflowed: false,
+            received: 0,
+            dropped: 0,
+        }
+    }
+
+    /// Frames accepted so far (wrapping).
+    pub const fn received(&self) -> u32 {
+        self.received
+    }
+
+    /// Frames dropped so far (wrapping).
+    pub const fn dropped(&self) -> u32 {
+        self.dropped
+    }
+
+    /// Forgets the frame in progress without counting it.
+    pub fn reset(&mut self) {
+        self.len = 0;
+        self.overflowed = false;
+    }
+
+    /// Feeds one byte; a delimiter completes a frame.
+    pub fn push(&mut self, byte: u8) -> Option<Result<Message<'_>, Error>> {
+        if byte == DELIMITER {
+            self.end_frame()
+        } else {
+            self.store(core::slice::from_ref(&byte));
+            None
+        }
+    }
+
+    /// Feeds bytes up to and including the first delimiter; returns what
+    /// [`push`](Self::push) returned for the last of them and the bytes not
+    /// consumed. Call it again with the rest until the rest is empty.
+    pub fn feed<'i>(&mut self, input: &'i [u8]) -> (Option<Result<Message<'_>, Error>>, &'i [u8]) {
+        match input.iter().position(|&b| b == DELIMITER) {
+            None => {
+                self.store(input);
+                (None, &[])
+            }
+            Some(end) => {
+                let (body, rest) = input.split_at(end);
+                self.store(body);
+                (self.end_frame(), rest.get(1..).unwrap_or_default())
+            }
+        }
+    }
+
+    fn store(&mut self, bytes: &[u8]) {
+        let end = self.len + bytes.len();
+        match self.buf.get_mut(self.len..end) {
+            Some(slot) if !self.overflowed => {
+                slot.copy_from_slice(bytes);
+                self.len = end;
+            }
+            _ => self.overflowed = true,
+        }
+    }
+
+    fn end_frame(&mut self) -> Option<Result<Message<'_>, Error>> {
+        let len = core::mem::take(&mut self.len);
+        if core::mem::take(&mut self.overflowed) {
+            self.dropped = self.dropped.wrapping_add(1);
+            return Some(Err(Error::FrameOverflow { capacity: CAP }));
+        }
+        if len == 0 {
+            return None;
+        }
+        let result = decode_frame(self.buf.get_mut(..len).unwrap_or_default());
+        match result {
+            Ok(_) => self.received = self.received.wrapping_add(1),
+            Err(_) => self.dropped = self.dropped.wrapping_add(1),
+        }
+        Some(result)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose(seq: u16, pulses: &[u16]) -> Message<'static> {
+        Message::Pose {
+            seq,
+            pulses: heapless::Vec::from_slice(pulses).unwrap(),
+        }
+    }
+
+    fn every_message() -> [Message<'static>; 8] {
+        static CLIP: [u8; MAX_CHUNK_LEN] = [0xA5; MAX_CHUNK_LEN];
+        [
+            Message::Hello {
+                version: PROTOCOL_VERSION,
+            },
+            Message::ClipChunk {
+                offset: 0,
+                total: 1234,
+                bytes: &CLIP[..10],
+            },
+            Message::ClipChunk {
+                offset: u32::MAX,
+                total: u32::MAX,
+                bytes: &CLIP,
+            },
+            Message::Play { loop_: true },
+            pose(7, &[6000, 0, u16::MAX]),
+            pose(u16::MAX, &[u16::MAX; MAX_POSE_SERVOS]),
+            Message::Stop,
+            Message::Status {
+                received: 100_000,
+                dropped: 3,
+                last_seq: 65_535,
+                state: 2,
+            },
+        ]
+    }
+
+    fn round_trip(message: &Message<'_>) -> usize {
+        let mut wire = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(message, &mut wire).unwrap();
+        assert_eq!(wire[n - 1], DELIMITER);
+        assert!(!wire[..n - 1].contains(&DELIMITER));
+        let mut copy = wire;
+        assert_eq!(&decode_frame(&mut copy[..n]).unwrap(), message);
+        let mut rx = FrameReceiver::<MAX_FRAME_LEN>::new();
+        let (last, body) = wire[..n].split_last().unwrap();
+        for &byte in body {
+            assert!(rx.push(byte).is_none());
+        }
+        assert_eq!(&rx.push(*last).unwrap().unwrap(), message);
+        n
+    }
+
+    #[test]
+    fn every_message_round_trips() {
+        for message in &every_message() {
+            round_trip(message);
+        }
+    }
+
+    #[test]
+    fn max_lengths_are_exact() {
+        let longest = every_message().iter().map(round_trip).max().unwrap();
+        assert_eq!(longest, MAX_FRAME_LEN);
+        let mut payload = [0u8; 2 * MAX_MESSAGE_LEN];
+        let worst = pose(u16::MAX, &[u16::MAX; MAX_POSE_SERVOS]);
+        assert_eq!(
+            postcard::to_slice(&worst, &mut payload).unwrap().len(),
+            MAX_MESSAGE_LEN
+        );
+        assert_eq!(MAX_FRAME_LEN, 107);
+    }
+
+    /// Spec examples: the exact bytes of a frame of each small message.
+    /// CRCs cross-checked with zlib's crc32 (same CRC-32/ISO-HDLC).
+    #[test]
+    fn frames_match_the_spec_examples() {
+        let cases: [(Message<'static>, &[u8]); 4] = [
+            // message 04, CRC 0xD56F2B94
+            (Message::Stop, &[0x06, 0x04, 0x94, 0x2B, 0x6F, 0xD5, 0x00]),
+            // message 00 01, CRC 0x36DE2269
+            (
+                Message::Hello { version: 1 },
+                &[0x01, 0x06, 0x01, 0x69, 0x22, 0xDE, 0x36, 0x00],
+            ),
+            // message 02 00, CRC 0x73EF707D
+            (
+                Message::Play { loop_: false },
+                &[0x02, 0x02, 0x05, 0x7D, 0x70, 0xEF, 0x73, 0x00],
+            ),
+            // message 03 01 01 F0 2E (seq 1, one pulse 6000 = varint F0 2E), CRC 0xF0966CED
+            (
+                pose(1, &[6000]),
+                &[
+                    0x0A, 0x03, 0x01, 0x01, 0xF0, 0x2E, 0xED, 0x6C, 0x96, 0xF0, 0x00,
+                ],
+            ),
+        ];
+        for (message, expected) in cases {
+            let mut wire = [0u8; MAX_FRAME_LEN];
+            let n = encode_frame(&message, &mut wire).unwrap();
+            assert_eq!(&wire[..n], expected, "{message:?}");
+        }
+    }
+
+    #[test]
+    fn encode_errors_are_typed() {
+        let big = [1u8; MAX_CHUNK_LEN + 1];
+        let chunk = Message::ClipChunk {
+            offset: 0,
+            total: 65,
+            bytes: &big,
+        };
+        let mut wire = [0u8; 2 * MAX_FRAME_LEN];
+        assert_eq!(
+            encode_frame(&chunk, &mut wire),
+            Err(Error::ChunkTooLong { len: 65, max: 64 })
+        );
+        assert_eq!(
+            encode_frame(&Message::Stop, &mut wire[..6]),
+            Err(Error::BufferTooSmall {
+                needed: 7,
+                available: 6
+            })
+        );
+    }
+
+    #[test]
+    fn corrupt_frames_are_dropped_with_their_reason() {
+        let mut wire = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(&pose(9, &[6000, 6100]), &mut wire).unwrap();
+
+        let mut flipped = wire;
+        flipped[3] ^= 0x10;
+        assert!(matches!(
+            decode_frame(&mut flipped[..n]),
+            Err(Error::FrameCrcMismatch { .. })
+        ));
+        // COBS of [1, 2, 3]: too short for a CRC; of four bytes: no message before the CRC.
+        assert_eq!(
+            decode_frame(&mut [4, 1, 2, 3]),
+            Err(Error::FrameTooShort { len: 3 })
+        );
+        assert_eq!(
+            decode_frame(&mut [5, 1, 2, 3, 4, 0]),
+            Err(Error::FrameTooShort { len: 4 })
+        );
+        let mut bad_cobs = wire;
+        bad_cobs[0] = 0xFE;
+        assert_eq!(decode_frame(&mut bad_cobs[..n]), Err(Error::FrameCobs));
+        assert_eq!(
+            decode_frame(&mut [0x01, 0x02, 0x00, 0x00]),
+            Err(Error::FrameCobs)
+        );
+
+        // A valid CRC over bytes that are not one message.
+        let mut trailing = [0u8; 16];
+        let body = [0x04, 0x04]; // Stop, then a stray byte
+        trailing[..2].copy_from_slice(&body);
+        trailing[2..6].copy_from_slice(&CRC32.checksum(&body).to_le_bytes());
+        let mut framed = [0u8; 16];
+        let m = cobs::try_encode(&trailing[..6], &mut framed).unwrap();
+        assert_eq!(decode_frame(&mut framed[..m]), Err(Error::FrameMessage));
+    }
+
+    #[test]
+    fn receiver_resynchronises_and_counts() {
+        let mut wire = [0u8; 3 * MAX_FRAME_LEN];
+        let a = encode_frame(&pose(1, &[6000]), &mut wire).unwrap();
+        let b = encode_frame(&pose(2, &[6001]), &mut wire[a..]).unwrap();
+        let c = encode_frame(&pose(3, &[6002]), &mut wire[a + b..]).unwrap();
+        wire[a + 2] ^= 0x40; // damage frame 2
+        let mut rx = FrameReceiver::<MAX_FRAME_LEN>::new();
+        let mut seqs = [0u16; 2];
+        let mut got = 0;
+        let mut input = &wire[1..a + b + c]; // join mid-frame 1
+        while !input.is_empty() {
+            let (frame, rest) = rx.feed(input);
+            if let Some(Ok(Message::Pose { seq, .. })) = frame {
+                seqs[got] = seq;
+                got += 1;
+            }
+            input = rest;
+        }
+        assert_eq!(&seqs[..got], &[3]);
+        assert_eq!((rx.received(), rx.dropped()), (1, 2));
+    }
+
+    #[test]
+    fn overflow_drops_one_frame_and_empty_frames_are_ignored() {
+        let mut wire = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(&pose(5, &[6000; 20]), &mut wire).unwrap();
+        let mut small = FrameReceiver::<16>::new();
+        for &byte in &wire[..n - 1] {
+            assert!(small.push(byte).is_none());
+        }
+        assert_eq!(
+            small.push(0),
+            Some(Err(Error::FrameOverflow { capacity: 16 }))
+        );
+        assert_eq!(small.push(0), None);
+        let (frame, rest) = small.feed(&[0, 0, 0]);
+        assert!(frame.is_none());
+        assert_eq!(rest.len(), 2);
+        assert_eq!((small.received(), small.dropped()), (0, 1));
+
+        let mut rx = FrameReceiver::<MAX_FRAME_LEN>::new();
+        let mut input = &wire[..n];
+        let mut delivered = 0;
+        while !input.is_empty() {
+            // Feed in 5-byte pieces, as a UART interrupt would.
+            let (piece, later) = input.split_at(input.len().min(5));
+            let mut piece = piece;
+            while !piece.is_empty() {
+                let (frame, rest) = rx.feed(piece);
+                delivered += usize::from(matches!(frame, Some(Ok(_))));
+                piece = rest;
+            }
+            input = later;
+        }
+        assert_eq!(delivered, 1);
+    }
+}
