@@ -4,6 +4,11 @@
 //!
 //! The clip is `$MOCAP_CLIP` when set (relative paths are relative to this directory), else
 //! `clips/demo.mcb`.
+//!
+//! The playback mode is `$MOCAP_SAMPLE_US`: unset or empty plays every frame with
+//! `Player::next_frame`; a period P in µs (a whole number > 0) samples the clip with
+//! `Player::sample_at` at t = 0, P, 2P, … up to and including the first t past its duration.
+//! It reaches src/main.rs as `OUT_DIR/config.rs` (`const SAMPLE_US: u64`, 0 = every frame).
 
 use std::env;
 use std::fs;
@@ -101,6 +106,34 @@ fn main() {
         ));
     }
     copy_or_fail(&clip, &out_dir.join("clip.mcb"), "clip");
+
+    // ---- playback mode
+    println!("cargo:rerun-if-env-changed=MOCAP_SAMPLE_US");
+    let sample_us: u64 = match env::var("MOCAP_SAMPLE_US") {
+        Ok(v) if v.trim().is_empty() => 0,
+        Ok(v) => match v.trim().parse::<u64>() {
+            Ok(n) if n > 0 => n,
+            _ => fail(&format!(
+                "mocap-firmware: MOCAP_SAMPLE_US must be a sampling period in microseconds \
+                 (a whole number > 0), got '{v}'. Unset it to play every frame."
+            )),
+        },
+        Err(env::VarError::NotPresent) => 0,
+        Err(e) => fail(&format!("mocap-firmware: MOCAP_SAMPLE_US: {e}")),
+    };
+    let config = format!(
+        "/// Sampling period in µs (`MOCAP_SAMPLE_US`); 0 plays every frame.\n\
+         pub const SAMPLE_US: u64 = {sample_us};\n"
+    );
+    let config_path = out_dir.join("config.rs");
+    if fs::read_to_string(&config_path).ok().as_deref() != Some(config.as_str()) {
+        fs::write(&config_path, config).unwrap_or_else(|e| {
+            fail(&format!(
+                "mocap-firmware: cannot write {}: {e}",
+                config_path.display()
+            ))
+        });
+    }
 }
 
 fn copy_or_fail(from: &Path, to: &Path, what: &str) {

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Every figure of BENCHMARKS.md in one run:
-#  1. `mocap bench` over the corpus folders at 1°, 0.25° and 20 mm (ratios, errors);
+#  1. `mocap bench` over the corpus folders, codecs index, pca-spline and auto, at 1°, 0.25°,
+#     20 mm and 50 mm with ARMS ≤ 10 mm (ratios, errors, encode times), and pca-spline encode
+#     time against clip length;
 #  2. decode cost in QEMU with -icount shift=0 on Cortex-M0/M3/M4F for one CMU clip;
 #  3. firmware and decoder sizes, decoder state size.
 #   bash scripts/bench.sh [CLIP.bvh]   (default: $MOCAP_CORPUS/cmu/35_01.bvh)
@@ -18,8 +20,22 @@ echo "## Rate–distortion (mocap bench)"
 echo
 /usr/bin/time -f "encode wall time for the whole run: %e s" \
     "$mocap" bench "$corpus/cmu" "$corpus/iclone-cmu" \
-    --max-error 1deg --max-error 0.25deg --max-error 20mm --json "$out/bench.json" 2>"$out/bench.log"
+    --codec index --codec pca-spline --codec auto \
+    --max-error 1deg --max-error 0.25deg --max-error 20mm --max-error 50mm+arms:10mm \
+    --json "$out/bench.json" 2>"$out/bench.log"
 tail -1 "$out/bench.log"
+echo
+echo "## pca-spline encode time against clip length (05_04 cut to N frames, 50mm+arms:10mm)"
+echo
+echo "| frames | seconds | bytes |"
+echo "|---|---|---|"
+for n in 150 300 600 1200; do
+    awk -v n="$n" '/^Frames:/ {print "Frames: " n; next} /^Frame Time/ {print; body=1; next} body {if (k++ < n) print; next} {print}' \
+        "$corpus/cmu/05_04.bvh" >"$out/cut.bvh"
+    /usr/bin/time -f %e -o "$out/time" "$mocap" encode "$out/cut.bvh" -o "$out/cut.mcb" \
+        --codec pca-spline --max-error 50mm+arms:10mm >/dev/null 2>&1
+    echo "| $n | $(cat "$out/time") | $(stat -c %s "$out/cut.mcb") |"
+done
 echo
 
 clip_src="${1:-$corpus/cmu/35_01.bvh}"

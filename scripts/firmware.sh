@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
 # Front door for the Cortex-M firmware example (firmware-example/): build, run in QEMU, size.
 #
-#   scripts/firmware.sh build --board B [--clip PATH.mcb]
+#   scripts/firmware.sh build --board B [--clip PATH.mcb] [--sample-us P]
 #       Builds the firmware with the clip embedded. The last line on stdout is the ELF's path
-#       (a copy per board and clip content, so parallel callers never overwrite each other's ELF).
-#   scripts/firmware.sh run --board B [--clip PATH.mcb] [--icount] [--timeout SECONDS]
+#       (a copy per board, clip content and mode, so parallel callers never overwrite each
+#       other's ELF). --sample-us P (µs, > 0) builds the sample mode (MOCAP_SAMPLE_US): the
+#       firmware prints Player::sample_at at t = 0, P, 2P, … up to and including the first t
+#       past the clip's duration instead of every frame.
+#   scripts/firmware.sh run --board B [--clip PATH.mcb] [--sample-us P] [--icount] [--timeout SECONDS]
 #       Builds, then runs the ELF in QEMU headless: the UART on stdout, semihosting on. The exit
 #       code is the firmware's (0 = every frame decoded), 124 on timeout (default 300 s).
 #       --icount adds `-icount shift=0` so the instruction figures in the output are exact.
-#   scripts/firmware.sh size --board B [--clip PATH.mcb]
+#   scripts/firmware.sh size --board B [--clip PATH.mcb] [--sample-us P]
 #       Builds, then prints key=value lines: text, data, bss, flash_bytes (text+data),
 #       ram_static_bytes (data+bss), flash_clip_bytes, flash_without_clip_bytes,
 #       decoder_code_bytes (code of mocap_decoder::*, crc::* and the firmware's out-of-line calls
@@ -72,12 +75,15 @@ BOARD=lm3s6965
 CLIP="$FW/clips/demo.mcb"
 ICOUNT=0
 TIMEOUT=300
+SAMPLE_US=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
         --board=*) BOARD="${1#*=}"; shift ;;
         --clip) [ "$#" -ge 2 ] || die "--clip needs a value"; CLIP="$2"; shift 2 ;;
         --clip=*) CLIP="${1#*=}"; shift ;;
+        --sample-us) [ "$#" -ge 2 ] || die "--sample-us needs a value"; SAMPLE_US="$2"; shift 2 ;;
+        --sample-us=*) SAMPLE_US="${1#*=}"; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -97,6 +103,11 @@ case "$CMD" in
 esac
 TARGET="$(board_target "$BOARD")"
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be a whole number of seconds"
+if [ -n "$SAMPLE_US" ]; then
+    [[ "$SAMPLE_US" =~ ^[0-9]+$ ]] && [ "$((10#$SAMPLE_US))" -gt 0 ] \
+        || die "--sample-us must be a whole number of microseconds > 0"
+    SAMPLE_US="$((10#$SAMPLE_US))"
+fi
 
 # ---- build: prints the ELF path
 build() {
@@ -123,20 +134,20 @@ build() {
 
     target_dir="$FW/target/$BOARD"
     elf_dir="$target_dir/elf"
-    elf="$elf_dir/mocap-firmware-$sha.elf"
+    elf="$elf_dir/mocap-firmware-$sha${SAMPLE_US:+-s$SAMPLE_US}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/$BOARD.lock"
     # One build per board at a time; the ELF is copied out under the lock.
     (
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
-        MOCAP_CLIP="$staged" CARGO_TARGET_DIR="$target_dir" \
+        MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" CARGO_TARGET_DIR="$target_dir" \
             mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
         cp "$target_dir/$TARGET/release/mocap-firmware" "$elf.$$"
         mv -f "$elf.$$" "$elf"
-    ) 9>"$lock"
+    ) 9>"$lock" || exit $? # bash clears `set -e` inside $(build): pass the failure on
     printf '%s\n' "$elf"
 }
 

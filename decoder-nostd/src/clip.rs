@@ -136,7 +136,12 @@ impl<'a> Clip<'a> {
                 .get(range)
                 .ok_or(Error::ContainerSectionBounds { id })?;
             match id {
-                consts::SECTION_HEADER => header = Some(payload),
+                consts::SECTION_HEADER | consts::SECTION_HEADER_COMPACT => {
+                    if header.is_some() {
+                        return Err(Error::ContainerDuplicateSection { id });
+                    }
+                    header = Some((id, payload));
+                }
                 consts::SECTION_CODEC_INDEX | consts::SECTION_CODEC_PCA_SPLINE => {
                     if codec.is_some() {
                         return Err(Error::ContainerDuplicateSection { id });
@@ -147,9 +152,10 @@ impl<'a> Clip<'a> {
                 _ => return Err(Error::ContainerUnknownSection { id }),
             }
         }
-        let header = Header::parse(header.ok_or(Error::ContainerMissingSection {
+        let (header_id, header) = header.ok_or(Error::ContainerMissingSection {
             id: consts::SECTION_HEADER,
-        })?)?;
+        })?;
+        let header = Header::parse(header, header_id == consts::SECTION_HEADER_COMPACT)?;
         let (codec_id, codec) = codec.ok_or(Error::ContainerNoCodec)?;
         let clip = Clip {
             bytes,

@@ -180,11 +180,13 @@ pub struct Header<'a> {
     joints_at: usize,
     channel_count: u32,
     channels_at: usize,
+    /// Section `0x02` (§3.4) rather than `0x01`.
+    compact: bool,
 }
 
 impl<'a> Header<'a> {
     /// Parses and validates a header section (SPEC.md §3).
-    pub(crate) fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
+    pub(crate) fn parse(bytes: &'a [u8], compact: bool) -> Result<Self, Error> {
         let mut r = Reader::new(bytes);
         let malformed = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
         let frame_time_ns = r.varint_u32().ok_or_else(|| malformed(&r))?;
@@ -200,7 +202,7 @@ impl<'a> Header<'a> {
         let joints_at = r.pos();
         let mut declared: u32 = 0;
         for index in 0..joint_count {
-            let joint = read_joint(&mut r)?;
+            let joint = read_joint(&mut r, compact, index)?;
             if let Some(p) = joint.parent {
                 if p >= index {
                     return Err(Error::HeaderParent { joint: index });
@@ -215,7 +217,11 @@ impl<'a> Header<'a> {
             let n = u32::try_from(joint.kinds.len()).map_err(|_| malformed(&r))?;
             declared = declared.checked_add(n).ok_or_else(|| malformed(&r))?;
         }
-        let channel_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        let channel_count = if compact {
+            declared
+        } else {
+            r.varint_u32().ok_or_else(|| malformed(&r))?
+        };
         if channel_count != declared {
             return Err(Error::HeaderChannelCount {
                 joints: declared,
@@ -224,7 +230,7 @@ impl<'a> Header<'a> {
         }
         let channels_at = r.pos();
         for channel in 0..channel_count {
-            let (unit, min, max) = read_channel(&mut r)?;
+            let (unit, min, max) = read_channel(&mut r, compact)?;
             Unit::from_code(unit).ok_or(Error::HeaderUnit { code: unit })?;
             if min > max {
                 return Err(Error::HeaderRange { channel });
@@ -242,6 +248,7 @@ impl<'a> Header<'a> {
             joints_at,
             channel_count,
             channels_at,
+            compact,
         })
     }
 
@@ -281,6 +288,8 @@ impl<'a> Header<'a> {
         JointIter {
             reader: Reader::new(self.bytes.get(self.joints_at..).unwrap_or(&[])),
             left: self.joint_count,
+            index: 0,
+            compact: self.compact,
         }
     }
 
@@ -293,11 +302,27 @@ impl<'a> Header<'a> {
             kind_pos: 0,
             table: Reader::new(self.bytes.get(self.channels_at..).unwrap_or(&[])),
             left: self.channel_count,
+            compact: self.compact,
         }
     }
 }
 
-fn read_joint<'a>(r: &mut Reader<'a>) -> Result<Joint<'a>, Error> {
+/// Flags byte of a compact joint (§3.4): channel count in bits 0–2.
+const COMPACT_COUNT_MASK: u8 = 0x07;
+/// Compact joint flag: an End Site.
+const COMPACT_END_SITE: u8 = 0x08;
+/// Compact joint flag: a parent follows.
+const COMPACT_HAS_PARENT: u8 = 0x10;
+/// Compact ranges are in units of 2^10.
+const COMPACT_RANGE_SHIFT: u32 = 10;
+/// Marker returned by [`read_channel`] for compact channels, whose unit
+/// follows from the kind.
+const COMPACT_UNIT_FROM_KIND: u8 = consts::unit::MILLIDEGREE;
+
+fn read_joint<'a>(r: &mut Reader<'a>, compact: bool, index: u32) -> Result<Joint<'a>, Error> {
+    if compact {
+        return read_compact_joint(r, index);
+    }
     let at = r.pos();
     let name_bytes = r.byte_seq().ok_or(Error::HeaderMalformed { offset: at })?;
     let name = core::str::from_utf8(name_bytes).map_err(|_| Error::HeaderUtf8 { offset: at })?;
@@ -322,8 +347,54 @@ fn read_joint<'a>(r: &mut Reader<'a>) -> Result<Joint<'a>, Error> {
     })
 }
 
-fn read_channel(r: &mut Reader<'_>) -> Result<(u8, i32, i32), Error> {
+fn read_compact_joint<'a>(r: &mut Reader<'a>, index: u32) -> Result<Joint<'a>, Error> {
     let bad = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
+    let flags = r.u8().ok_or_else(|| bad(r))?;
+    if flags & !(COMPACT_COUNT_MASK | COMPACT_END_SITE | COMPACT_HAS_PARENT) != 0 {
+        return Err(bad(r));
+    }
+    let parent = if flags & COMPACT_HAS_PARENT != 0 {
+        let back = r.varint_u32().ok_or_else(|| bad(r))?;
+        // index − back must be an earlier joint: 1 ≤ back ≤ index.
+        Some(
+            index
+                .checked_sub(back)
+                .filter(|_| back >= 1)
+                .ok_or(Error::HeaderParent { joint: index })?,
+        )
+    } else {
+        None
+    };
+    let at = r.pos();
+    let name_bytes = r.byte_seq().ok_or(Error::HeaderMalformed { offset: at })?;
+    let name = core::str::from_utf8(name_bytes).map_err(|_| Error::HeaderUtf8 { offset: at })?;
+    let mut offset_um = [0i32; 3];
+    for v in offset_um.iter_mut() {
+        *v = r.zigzag_i32().ok_or_else(|| bad(r))?;
+    }
+    let count = usize::from(flags & COMPACT_COUNT_MASK);
+    let kinds = r.take(count).ok_or_else(|| bad(r))?;
+    Ok(Joint {
+        name,
+        parent,
+        offset_um,
+        end_site: flags & COMPACT_END_SITE != 0,
+        kinds,
+    })
+}
+
+fn read_channel(r: &mut Reader<'_>, compact: bool) -> Result<(u8, i32, i32), Error> {
+    let bad = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
+    if compact {
+        // Unit from the kind (the caller knows it); bounds in 2^10 units.
+        let lo = r.zigzag_i32().ok_or_else(|| bad(r))?;
+        let span = r.varint_u32().ok_or_else(|| bad(r))?;
+        let scale =
+            |v: i64| (v << COMPACT_RANGE_SHIFT).clamp(i32::MIN.into(), i32::MAX.into()) as i32;
+        let min = scale(i64::from(lo));
+        let max = scale(i64::from(lo) + i64::from(span));
+        return Ok((COMPACT_UNIT_FROM_KIND, min, max));
+    }
     let unit = r.u8().ok_or_else(|| bad(r))?;
     let min = r.zigzag_i32().ok_or_else(|| bad(r))?;
     let max = r.zigzag_i32().ok_or_else(|| bad(r))?;
@@ -335,6 +406,8 @@ fn read_channel(r: &mut Reader<'_>) -> Result<(u8, i32, i32), Error> {
 pub struct JointIter<'a> {
     reader: Reader<'a>,
     left: u32,
+    index: u32,
+    compact: bool,
 }
 
 impl<'a> Iterator for JointIter<'a> {
@@ -345,7 +418,9 @@ impl<'a> Iterator for JointIter<'a> {
             return None;
         }
         self.left -= 1;
-        read_joint(&mut self.reader).ok()
+        let j = read_joint(&mut self.reader, self.compact, self.index).ok();
+        self.index += 1;
+        j
     }
 }
 
@@ -358,6 +433,7 @@ pub struct ChannelIter<'a> {
     kind_pos: usize,
     table: Reader<'a>,
     left: u32,
+    compact: bool,
 }
 
 impl<'a> Iterator for ChannelIter<'a> {
@@ -386,13 +462,19 @@ impl<'a> Iterator for ChannelIter<'a> {
         let joint = self.current?;
         let code = *joint.kinds.get(self.kind_pos)?;
         self.kind_pos += 1;
-        let (unit, min, max) = read_channel(&mut self.table).ok()?;
+        let (unit, min, max) = read_channel(&mut self.table, self.compact).ok()?;
         self.left -= 1;
+        let kind = ChannelKind::from_code(code)?;
+        let unit = match (self.compact, kind.is_rotation()) {
+            (false, _) => Unit::from_code(unit)?,
+            (true, true) => Unit::Millidegree,
+            (true, false) => Unit::Micrometre,
+        };
         Some(Channel {
             joint: self.joint_index,
             joint_name: joint.name,
-            kind: ChannelKind::from_code(code)?,
-            unit: Unit::from_code(unit)?,
+            kind,
+            unit,
             min,
             max,
         })

@@ -59,6 +59,15 @@ impl std::error::Error for BvhError {}
 /// Reads and parses a BVH file. I/O errors are reported as a [`BvhError`]
 /// with line and column 0. Bytes that are not valid UTF-8 (e.g. Latin-1 joint
 /// names) are replaced by U+FFFD rather than rejected.
+/// The name given to the `k`-th End Site (1-based) of joint `parent`:
+/// `<parent>_End`, then `<parent>_End2`, …
+pub fn end_site_name(parent: &str, k: usize) -> String {
+    match k {
+        1 => format!("{parent}_End"),
+        k => format!("{parent}_End{k}"),
+    }
+}
+
 pub fn read_file(path: &Path) -> Result<Motion, BvhError> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| BvhError {
@@ -565,10 +574,7 @@ fn parse_hierarchy(lx: &mut Lexer<'_>) -> Result<(Vec<Joint>, Token), BvhError> 
             }
             open.has_children = true;
             open.end_sites += 1;
-            let name = match open.end_sites {
-                1 => format!("{jname}_End"),
-                k => format!("{jname}_End{k}"),
-            };
+            let name = end_site_name(&jname, open.end_sites);
             let parent = open.joint;
             expect_open_brace(lx, "End Site", &jname)?;
             stack.push(open_joint(&mut joints, name, Some(parent), t.line, true));

@@ -26,18 +26,28 @@ pub fn decode_all(clip: &Clip<'_>) -> Result<Vec<i32>, mocap_decoder::Error> {
 pub fn skeleton(clip: &Clip<'_>) -> Skeleton {
     let h = clip.header();
     let unit = f64::from(h.source_unit_nm()) * 1e-3; // µm per source unit
-    Skeleton {
-        joints: h
-            .joints()
-            .map(|j| Joint {
-                name: j.name.to_string(),
-                parent: j.parent.map(|p| p as usize),
-                offset: j.offset_um.map(|o| f64::from(o) / unit),
-                channels: j.channel_kinds().collect(),
-                end_site: j.end_site,
-            })
-            .collect(),
+    let mut joints: Vec<Joint> = Vec::with_capacity(h.joint_count());
+    let mut end_sites = vec![0usize; h.joint_count()];
+    for j in h.joints() {
+        let parent = j.parent.map(|p| p as usize);
+        // Compact headers leave End Sites unnamed (SPEC.md §3.4): name
+        // them as the BVH reader does.
+        let name = match parent {
+            Some(p) if j.end_site && j.name.is_empty() && p < joints.len() => {
+                end_sites[p] += 1;
+                crate::bvh::end_site_name(&joints[p].name, end_sites[p])
+            }
+            _ => j.name.to_string(),
+        };
+        joints.push(Joint {
+            name,
+            parent,
+            offset: j.offset_um.map(|o| f64::from(o) / unit),
+            channels: j.channel_kinds().collect(),
+            end_site: j.end_site,
+        });
     }
+    Skeleton { joints }
 }
 
 /// Decodes a clip into a motion in the source's units, angles wrapped.
@@ -68,4 +78,27 @@ pub fn uart_text(frames: &[i32], channels: usize) -> String {
         s.push('\n');
     }
     s
+}
+
+/// The text the firmware example prints in its sample mode (`MOCAP_SAMPLE_US`,
+/// firmware-example/README.md): one line per `Player::sample_at(t)` for
+/// t = 0, P, 2P, … µs up to and including the first t past the clip's
+/// duration, in the format of [`uart_text`].
+pub fn uart_text_sampled(clip: &Clip<'_>, period_us: u64) -> Result<String, mocap_decoder::Error> {
+    assert!(period_us > 0, "sampling period must be > 0 µs");
+    let mut player = Box::new(Player::<HOST_MAX_CHANNELS>::new(clip)?);
+    let channels = player.channel_count();
+    let duration_us = clip.header().duration_us();
+    let mut out = vec![0i32; channels];
+    let mut samples = Vec::new();
+    let mut t = 0u64;
+    loop {
+        player.sample_at(t, &mut out)?;
+        samples.extend_from_slice(&out);
+        if t > duration_us {
+            break;
+        }
+        t += period_us;
+    }
+    Ok(uart_text(&samples, channels))
 }

@@ -90,9 +90,53 @@ impl HeaderWire {
         }
     }
 
-    /// The postcard bytes of the header section.
+    /// The postcard bytes of the header section `0x01` (SPEC.md §3.1).
     pub fn to_bytes(&self) -> Vec<u8> {
         postcard::to_stdvec(self).expect("postcard serialisation of plain data cannot fail")
+    }
+
+    /// The compact header section `0x02` (SPEC.md §3.4): parents as
+    /// back-references, End Sites unnamed, units implied by kinds, ranges
+    /// as outward-rounded bounds in units of 2^10.
+    pub fn to_compact(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let varint = |out: &mut Vec<u8>, v: u32| {
+            out.extend_from_slice(postcard::to_stdvec(&v).expect("u32").as_slice())
+        };
+        let zigzag = |out: &mut Vec<u8>, v: i32| {
+            out.extend_from_slice(postcard::to_stdvec(&v).expect("i32").as_slice())
+        };
+        varint(&mut out, self.frame_time_ns);
+        varint(&mut out, self.frame_count);
+        varint(&mut out, self.source_unit_nm);
+        varint(&mut out, self.joints.len() as u32);
+        for (i, j) in self.joints.iter().enumerate() {
+            let mut flags = j.kinds.len() as u8;
+            if j.end_site {
+                flags |= 0x08;
+            }
+            if j.parent.is_some() {
+                flags |= 0x10;
+            }
+            out.push(flags);
+            if let Some(p) = j.parent {
+                varint(&mut out, i as u32 - p);
+            }
+            let name: &str = if j.end_site { "" } else { &j.name };
+            varint(&mut out, name.len() as u32);
+            out.extend_from_slice(name.as_bytes());
+            for &o in &j.offset_um {
+                zigzag(&mut out, o);
+            }
+            out.extend_from_slice(&j.kinds);
+        }
+        for c in &self.channels {
+            let lo = c.min.div_euclid(1024);
+            let hi = (i64::from(c.max) + 1023).div_euclid(1024);
+            zigzag(&mut out, lo);
+            varint(&mut out, (hi - i64::from(lo)) as u32);
+        }
+        out
     }
 }
 

@@ -272,7 +272,10 @@ fn prove(
 ) -> Result<Attempt, String> {
     let build = |ranges: &FixedChannels| {
         let header = HeaderWire::new(m, opts.metres_per_unit, ranges);
-        assemble(&[(consts::SECTION_HEADER, header.to_bytes()), section.clone()])
+        assemble(&[
+            (consts::SECTION_HEADER_COMPACT, header.to_compact()),
+            section.clone(),
+        ])
     };
     // Decoding does not read the header's ranges: decode once with the
     // input's, then write the decoded ones.
@@ -340,9 +343,9 @@ pub fn pca_weights(
         .enumerate()
         .map(|(c, kind)| {
             if !kind.is_rotation() {
-                // Translations move every joint: a quarter of the
-                // tolerance (root curves are cheap).
-                return 4e-3;
+                // Translations move every joint and weigh on ARMS: an
+                // eighth of the tolerance (root curves are cheap).
+                return 8e-3;
             }
             if !mm {
                 return 1e-3;
@@ -484,7 +487,7 @@ fn encode_pca(
     let (mut lo, mut hi) = (scale / 256.0, scale * 2.0);
     let mut best: Option<Attempt> = None;
     let mut attempts = 0;
-    for _ in 0..12 {
+    for _ in 0..20 {
         attempts += 1;
         let tau = (lo * hi).sqrt();
         let a = run(tau)?;
@@ -506,8 +509,19 @@ fn encode_pca(
         } else {
             hi = tau;
         }
-        if hi / lo < 1.05 {
+        if hi / lo < 1.02 {
             break;
+        }
+    }
+    // Size and error are not quite monotonic in τ: probe a little above
+    // the boundary too and keep the smallest clip that holds.
+    for i in 1..=6 {
+        attempts += 1;
+        let a = run(lo * (1.0 + 0.03 * i as f64))?;
+        if opts.bound.holds(&a.metrics)
+            && best.as_ref().is_none_or(|b| a.bytes.len() < b.bytes.len())
+        {
+            best = Some(a);
         }
     }
     let best = match best {

@@ -1,8 +1,10 @@
 //! mocap-firmware: plays the `.mcb` clip embedded in flash and prints every decoded frame on
 //! the board's UART, then decode statistics, then exits through semihosting (QEMU's exit code).
+//! Built with `MOCAP_SAMPLE_US=P`, it prints `Player::sample_at` at t = 0, P, 2P, … instead
+//! (up to and including the first t past the clip's duration).
 //!
 //! Output format: see README.md. Lines starting with `#` are metadata; every other line is
-//! one frame and must be byte-identical to the host decoder's output for the same clip.
+//! one frame (or sample) and must be byte-identical to the host decoder's output for the clip.
 #![no_std]
 #![no_main]
 
@@ -24,6 +26,15 @@ const MAX_CHANNELS: usize = 320;
 
 /// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `clips/demo.mcb`).
 static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
+
+/// Playback mode, chosen at build time (build.rs: `MOCAP_SAMPLE_US`).
+mod config {
+    include!(concat!(env!("OUT_DIR"), "/config.rs"));
+}
+use config::SAMPLE_US;
+
+/// Whether this build samples with `sample_at` (else it plays every frame with `next_frame`).
+const SAMPLING: bool = SAMPLE_US != 0;
 
 type Out = Text<Uart>;
 
@@ -48,6 +59,15 @@ mod decoder_glue {
         out: &mut [i32; MAX_CHANNELS],
     ) -> Result<Option<u32>, Error> {
         player.next_frame(out)
+    }
+
+    #[inline(never)]
+    pub fn sample_at(
+        player: &mut Player<'static, MAX_CHANNELS>,
+        t_us: u64,
+        out: &mut [i32; MAX_CHANNELS],
+    ) -> Result<(), Error> {
+        player.sample_at(t_us, out)
     }
 }
 
@@ -171,79 +191,124 @@ enum Failure {
     Decoder(&'static str, Error),
     FrameIndex { expected: u32, got: u32 },
     FrameCount { header: u32, decoded: u32 },
+    SampleCount { expected: u32, got: u32 },
+}
+
+/// Number of samples in sample mode: t = 0, P, 2P, … up to and including the first t past
+/// `duration_us`, that is ⌊duration / P⌋ + 2.
+fn sample_count(duration_us: u64) -> u64 {
+    // `max(1)`: this also compiles (unused) in frame mode, where SAMPLE_US is 0.
+    duration_us / SAMPLE_US.max(1) + 2
+}
+
+/// The output lines of one run: every frame in order (`next_frame`), or in sample mode
+/// `sample_at(t)` for t = 0, P, 2P, … up to and including the first t past the duration.
+struct Playback {
+    player: Player<'static, MAX_CHANNELS>,
+    /// Lines produced so far.
+    produced: u32,
+    /// Sample mode: the next sample's time, and whether the last one has been produced.
+    t_us: u64,
+    duration_us: u64,
+    done: bool,
+}
+
+impl Playback {
+    fn new(clip: &Clip<'static>) -> Result<Self, Failure> {
+        Ok(Playback {
+            player: decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?,
+            produced: 0,
+            t_us: 0,
+            duration_us: clip.header().duration_us(),
+            done: false,
+        })
+    }
+
+    /// Produces the next line into `out`; `Ok(false)` once there is none left.
+    #[inline(always)]
+    fn step(&mut self, out: &mut [i32; MAX_CHANNELS]) -> Result<bool, Failure> {
+        if SAMPLING {
+            if self.done {
+                return Ok(false);
+            }
+            let t = self.t_us;
+            decoder_glue::sample_at(&mut self.player, t, out)
+                .map_err(|e| Failure::Decoder("sample", e))?;
+            self.produced += 1;
+            if t > self.duration_us {
+                self.done = true;
+            } else {
+                self.t_us = t + SAMPLE_US;
+            }
+            return Ok(true);
+        }
+        match decoder_glue::next_frame(&mut self.player, out) {
+            Ok(Some(index)) => {
+                if index != self.produced {
+                    return Err(Failure::FrameIndex {
+                        expected: self.produced,
+                        got: index,
+                    });
+                }
+                self.produced += 1;
+                Ok(true)
+            }
+            Ok(None) => Ok(false),
+            Err(e) => Err(Failure::Decoder("frame", e)),
+        }
+    }
 }
 
 /// Figures of the timed pass.
 struct Timing {
-    frames: u32,
+    /// Frames, or samples in sample mode.
+    lines: u32,
     total_ticks: u64,
-    max_frame_ticks: u32,
+    max_line_ticks: u32,
 }
 
-/// Pass 1: decode every frame, timing only the decoder (no output in the measured spans).
-/// Telescoping reads: each read ends one span and starts the next, so the sum is exact.
+/// Pass 1: decode every frame (or sample), timing only the decoder (no output in the measured
+/// spans). Telescoping reads: each read ends one span and starts the next, so the sum is exact.
 #[inline(never)]
 fn timed_pass(clip: &Clip<'static>) -> Result<Timing, Failure> {
-    let mut player = decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?;
+    let mut playback = Playback::new(clip)?;
     let mut out = [0i32; MAX_CHANNELS];
     let mut timing = Timing {
-        frames: 0,
+        lines: 0,
         total_ticks: 0,
-        max_frame_ticks: 0,
+        max_line_ticks: 0,
     };
     let mut prev = ticks::now();
     loop {
-        let result = decoder_glue::next_frame(&mut player, &mut out);
+        let more = playback.step(&mut out)?;
         let now = ticks::now();
         let spent = ticks::since(prev, now);
         prev = now;
-        match result {
-            Ok(Some(index)) => {
-                if index != timing.frames {
-                    return Err(Failure::FrameIndex {
-                        expected: timing.frames,
-                        got: index,
-                    });
-                }
-                timing.frames += 1;
-                timing.total_ticks += u64::from(spent);
-                timing.max_frame_ticks = timing.max_frame_ticks.max(spent);
-            }
-            Ok(None) => return Ok(timing),
-            Err(e) => return Err(Failure::Decoder("frame", e)),
+        if !more {
+            return Ok(timing);
         }
+        timing.lines += 1;
+        timing.total_ticks += u64::from(spent);
+        timing.max_line_ticks = timing.max_line_ticks.max(spent);
     }
 }
 
-/// Pass 2: decode again and print every frame.
+/// Pass 2: decode again and print every frame (or sample).
 #[inline(never)]
 fn print_pass(clip: &Clip<'static>, text: &mut Out) -> Result<u32, Failure> {
-    let mut player = decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?;
-    let channels = player.channel_count();
+    let mut playback = Playback::new(clip)?;
+    let channels = playback.player.channel_count();
     let mut out = [0i32; MAX_CHANNELS];
-    let mut frames = 0u32;
-    loop {
-        match decoder_glue::next_frame(&mut player, &mut out) {
-            Ok(Some(index)) => {
-                if index != frames {
-                    return Err(Failure::FrameIndex {
-                        expected: frames,
-                        got: index,
-                    });
-                }
-                frames += 1;
-                for (i, value) in out.iter().take(channels).enumerate() {
-                    if i > 0 {
-                        text.str(" ");
-                    }
-                    text.i32(*value);
-                }
-                text.nl();
+    while playback.step(&mut out)? {
+        for (i, value) in out.iter().take(channels).enumerate() {
+            if i > 0 {
+                text.str(" ");
             }
-            Ok(None) => return Ok(frames),
-            Err(e) => return Err(Failure::Decoder("frame", e)),
+            text.i32(*value);
         }
+        text.nl();
     }
+    Ok(playback.produced)
 }
 
 fn run(text: &mut Out) -> Result<(), Failure> {
@@ -259,6 +324,16 @@ fn run(text: &mut Out) -> Result<(), Failure> {
         .kv("frames", u64::from(header_frames))
         .kv("channels", channels as u64)
         .nl();
+    let duration_us = clip.header().duration_us();
+    if SAMPLING {
+        text.str("# mode=sample")
+            .kv("sample_us", SAMPLE_US)
+            .kv("samples", sample_count(duration_us))
+            .kv("duration_us", duration_us)
+            .nl();
+    } else {
+        text.str("# mode=frames").nl();
+    }
 
     let t0 = ticks::now();
     let player = decoder_glue::new_player(&clip).map_err(|e| Failure::Decoder("player", e))?;
@@ -267,17 +342,31 @@ fn run(text: &mut Out) -> Result<(), Failure> {
 
     let timing = timed_pass(&clip)?;
     let printed = print_pass(&clip, text)?;
-    if timing.frames != header_frames || printed != header_frames {
+    if SAMPLING {
+        let expected = sample_count(duration_us);
+        if u64::from(timing.lines) != expected || u64::from(printed) != expected {
+            return Err(Failure::SampleCount {
+                expected: expected.min(u64::from(u32::MAX)) as u32,
+                got: timing.lines.min(printed),
+            });
+        }
+    } else if timing.lines != header_frames || printed != header_frames {
         return Err(Failure::FrameCount {
             header: header_frames,
-            decoded: timing.frames.min(printed),
+            decoded: timing.lines.min(printed),
         });
     }
 
     // ---- statistics (all `# ` lines; excluded from host comparisons)
     let cal = calibration_ticks;
-    let frames = u64::from(timing.frames.max(1));
-    let values = frames * (channels.max(1) as u64);
+    // Per output line: per frame, or per sample in sample mode.
+    let (count_key, per_key, max_key) = if SAMPLING {
+        ("samples", "per_sample", "max_sample")
+    } else {
+        ("frames", "per_frame", "max_frame")
+    };
+    let lines = u64::from(timing.lines.max(1));
+    let values = lines * (channels.max(1) as u64);
     let decode = instructions(timing.total_ticks, cal);
     let parse = instructions(u64::from(parse_ticks), cal);
     let new = instructions(u64::from(new_ticks), cal);
@@ -288,19 +377,16 @@ fn run(text: &mut Out) -> Result<(), Failure> {
         .nl();
     text.str("#")
         .kv("instructions_total", total)
-        .kv("frames", u64::from(timing.frames))
-        .kv("per_frame", total / frames)
+        .kv(count_key, u64::from(timing.lines))
+        .kv(per_key, total / lines)
         .kv("per_channel_x100", total * 100 / values)
         .nl();
     text.str("#")
         .kv("decode_instructions_total", decode)
-        .kv("frames", u64::from(timing.frames))
-        .kv("per_frame", decode / frames)
+        .kv(count_key, u64::from(timing.lines))
+        .kv(per_key, decode / lines)
         .kv("per_channel_x100", decode * 100 / values)
-        .kv(
-            "max_frame",
-            instructions(u64::from(timing.max_frame_ticks), cal),
-        )
+        .kv(max_key, instructions(u64::from(timing.max_line_ticks), cal))
         .nl();
     text.str("#")
         .kv("parse_instructions", parse)
@@ -346,6 +432,12 @@ fn report(text: &mut Out, failure: &Failure) {
             text.str("# error frame_count")
                 .kv("header", u64::from(*header))
                 .kv("decoded", u64::from(*decoded))
+                .nl();
+        }
+        Failure::SampleCount { expected, got } => {
+            text.str("# error sample_count")
+                .kv("expected", u64::from(*expected))
+                .kv("got", u64::from(*got))
                 .nl();
         }
     }

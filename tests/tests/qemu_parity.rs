@@ -1,7 +1,10 @@
 //! The firmware example decodes clips on Cortex-M0 (microbit), M3
 //! (lm3s6965evb) and M4F (mps2-an386) in QEMU; its UART output must be
 //! byte-identical to the host decoder's (firmware-example/README.md gives the
-//! format; `#` lines carry statistics and are not compared).
+//! format; `#` lines carry statistics and are not compared). Index clips are
+//! played frame by frame; pca-spline clips frame by frame and also in the
+//! firmware's sample mode (`--sample-us`, `Player::sample_at`), compared with
+//! `clipfile::uart_text_sampled`.
 //!
 //! Needs `scripts/firmware.sh` to work (the README's test command installs
 //! what it needs). Without QEMU the test prints SKIPPED, unless `CI` is set,
@@ -17,6 +20,10 @@ use mocap_tests::{corpus_files, workspace_root};
 
 const BOARDS: [&str; 3] = ["microbit", "lm3s6965", "mps2-an386"];
 
+/// Sample mode period: a 50 Hz servo rate, which falls between the frames of
+/// a 120 Hz clip.
+const SERVO_PERIOD_US: u64 = 20_000;
+
 fn qemu_available() -> bool {
     let ok = Command::new("qemu-system-arm")
         .arg("--version")
@@ -31,10 +38,16 @@ fn qemu_available() -> bool {
     ok
 }
 
-fn encode_to(m: &Motion, path: &Path, key_interval: Option<u16>) -> Vec<u8> {
+fn encode_to(
+    m: &Motion,
+    path: &Path,
+    codec: CodecChoice,
+    bound: &str,
+    key_interval: Option<u16>,
+) -> Vec<u8> {
     let opts = EncodeOptions {
-        codec: CodecChoice::Index,
-        bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
+        codec,
+        bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),
         key_interval,
     };
@@ -43,13 +56,15 @@ fn encode_to(m: &Motion, path: &Path, key_interval: Option<u16>) -> Vec<u8> {
     bytes
 }
 
-fn run_board(board: &str, clip: &Path) -> String {
-    let out = Command::new("bash")
-        .arg(workspace_root().join("scripts/firmware.sh"))
+fn run_board(board: &str, clip: &Path, sample_us: Option<u64>) -> String {
+    let mut cmd = Command::new("bash");
+    cmd.arg(workspace_root().join("scripts/firmware.sh"))
         .args(["run", "--board", board, "--clip"])
-        .arg(clip)
-        .output()
-        .expect("scripts/firmware.sh runs");
+        .arg(clip);
+    if let Some(p) = sample_us {
+        cmd.args(["--sample-us", &p.to_string()]);
+    }
+    let out = cmd.output().expect("scripts/firmware.sh runs");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),
@@ -67,15 +82,39 @@ fn run_board(board: &str, clip: &Path) -> String {
 }
 
 fn check(name: &str, m: &Motion, key_interval: Option<u16>) {
+    check_codec(name, m, CodecChoice::Index, "1deg", key_interval, None);
+}
+
+/// Encodes `m`, runs the firmware on every board and compares its frame lines
+/// with the host decoder: every frame (`next_frame`), or with `sample_us` the
+/// firmware's sample mode against `clipfile::uart_text_sampled`.
+fn check_codec(
+    name: &str,
+    m: &Motion,
+    codec: CodecChoice,
+    bound: &str,
+    key_interval: Option<u16>,
+    sample_us: Option<u64>,
+) {
     let dir = workspace_root().join("target/qemu-parity");
     std::fs::create_dir_all(&dir).unwrap();
     let path: PathBuf = dir.join(format!("{name}.mcb"));
-    let bytes = encode_to(m, &path, key_interval);
+    let bytes = encode_to(m, &path, codec, bound, key_interval);
     let clip = Clip::parse(&bytes).unwrap();
-    let frames = clipfile::decode_all(&clip).unwrap();
-    let expected = clipfile::uart_text(&frames, clip.header().channel_count());
+    let (expected, what) = match sample_us {
+        None => {
+            let frames = clipfile::decode_all(&clip).unwrap();
+            let text = clipfile::uart_text(&frames, clip.header().channel_count());
+            (text, format!("{} frames", m.frames()))
+        }
+        Some(p) => {
+            let text = clipfile::uart_text_sampled(&clip, p).unwrap();
+            let n = text.lines().count();
+            (text, format!("{n} samples every {p} us"))
+        }
+    };
     for board in BOARDS {
-        let uart = run_board(board, &path);
+        let uart = run_board(board, &path, sample_us);
         let data: String = uart
             .lines()
             .filter(|l| !l.starts_with('#'))
@@ -88,11 +127,7 @@ fn check(name: &str, m: &Motion, key_interval: Option<u16>) {
             expected.len()
         );
         let stats: Vec<&str> = uart.lines().filter(|l| l.starts_with("# ")).collect();
-        eprintln!(
-            "{name} on {board}: {} frames identical; {}",
-            m.frames(),
-            stats.join("; ")
-        );
+        eprintln!("{name} on {board}: {what} identical; {}", stats.join("; "));
     }
 }
 
@@ -115,5 +150,34 @@ fn firmware_output_matches_host_on_three_cores() {
             .find(|p| p.ends_with("002_03.bvh"))
             .unwrap_or(&files[0]);
         check("iclone-002_03", &bvh::read_file(f).unwrap(), Some(16));
+    }
+}
+
+/// pca-spline clips: every frame, and `sample_at` at a 50 Hz servo rate.
+fn check_pca_spline(name: &str, m: &Motion, bound: &str) {
+    let codec = CodecChoice::PcaSpline;
+    check_codec(name, m, codec, bound, None, None);
+    check_codec(
+        &format!("{name}-sampled"),
+        m,
+        codec,
+        bound,
+        None,
+        Some(SERVO_PERIOD_US),
+    );
+}
+
+#[test]
+fn pca_spline_firmware_output_matches_host_on_three_cores() {
+    if !qemu_available() {
+        return;
+    }
+    check_pca_spline("pca-demo", &generate::animatronic_demo(), "1deg");
+    if let Some(files) = corpus_files("cmu") {
+        let f = files
+            .iter()
+            .find(|p| p.ends_with("35_01.bvh"))
+            .unwrap_or(&files[0]);
+        check_pca_spline("pca-cmu-35_01", &bvh::read_file(f).unwrap(), "50mm");
     }
 }

@@ -501,9 +501,11 @@ fn reconstruct<const WIDE: bool>(idx: &[u8], head: &GroupHead<'_>, coef: &[i32],
     let k = head.k.max(1);
     let rows = head.basis.chunks_exact(k);
     if head.k == 0 {
-        for (c, m) in indices.zip(means) {
+        let mut r = Reader::new(head.mean);
+        for c in indices {
+            let m = r.zigzag_i32().unwrap_or(0);
             if let Some(o) = out.get_mut(c) {
-                *o = mean_of(m).wrapping_shl(head.mean_shift);
+                *o = m.wrapping_shl(head.mean_shift);
             }
         }
         return;
@@ -547,7 +549,18 @@ fn read_group<'a>(r: &mut Reader<'a>, n: usize) -> Option<GroupHead<'a>> {
         return None;
     }
     let k = usize::from(k);
-    let mean = r.take(n.checked_mul(2)?)?;
+    // k = 0: n zigzag varints (a constant pose is often mostly zeros);
+    // k > 0: n × i16, read on every pose.
+    let mean = if k == 0 {
+        let at = r.clone();
+        for _ in 0..n {
+            r.zigzag_i32()?;
+        }
+        let len = r.pos() - at.pos();
+        at.clone().take(len)?
+    } else {
+        r.take(n.checked_mul(2)?)?
+    };
     let mut head = GroupHead {
         k,
         mean_shift: u32::from(mean_shift),

@@ -95,10 +95,53 @@ pub fn select(
         }
         next.push(last);
         if next.len() == times.len() {
-            return (times, controls);
+            return prune(data, k, tol, &error, times, controls);
         }
         times = next;
     }
+}
+
+/// Worst frame error of the fit at `times`, and the controls.
+fn worst(data: &[f64], k: usize, times: &[u32], error: &impl Fn(&[f64]) -> f64) -> (f64, Vec<f64>) {
+    let len = data.len() / k;
+    let controls = fit(times, data, k);
+    let fitted = evaluate(times, &controls, k, len);
+    let mut delta = vec![0.0; k];
+    let mut w = 0.0f64;
+    for f in 0..len {
+        for j in 0..k {
+            delta[j] = data[f * k + j] - fitted[f * k + j];
+        }
+        w = w.max(error(&delta));
+    }
+    (w, controls)
+}
+
+/// Midpoint insertion overshoots: drop every key whose removal keeps the
+/// worst error within `max(tol, the current worst)`.
+fn prune(
+    data: &[f64],
+    k: usize,
+    tol: f64,
+    error: &impl Fn(&[f64]) -> f64,
+    mut times: Vec<u32>,
+    mut controls: Vec<f64>,
+) -> (Vec<u32>, Vec<f64>) {
+    let (now, _) = worst(data, k, &times, error);
+    let limit = tol.max(now);
+    let mut i = 1;
+    while i + 1 < times.len() {
+        let mut fewer = times.clone();
+        fewer.remove(i);
+        let (w, c) = worst(data, k, &fewer, error);
+        if w <= limit {
+            times = fewer;
+            controls = c;
+        } else {
+            i += 1;
+        }
+    }
+    (times, controls)
 }
 
 /// A symmetric positive-definite matrix with half-bandwidth 3 (the normal

@@ -55,7 +55,7 @@ impl Params {
             tolerance,
             pca_share: 0.6,
             key_share: 0.75,
-            quant_share: 0.25,
+            quant_share: 0.1,
             max_components: usize::from(MAX_COMPONENTS),
             ppca: Some(Ppca::paper(fps)),
             blend: ((10.0 * fps / 120.0).round() as usize).max(1),

@@ -72,11 +72,14 @@ impl Model {
 fn write_group(out: &mut Vec<u8>, g: &GroupModel, len: u32) {
     out.push(g.k as u8);
     out.push(g.mean_shift);
+    if g.k == 0 {
+        for &m in &g.mean {
+            zigzag(out, i32::from(m));
+        }
+        return;
+    }
     for m in &g.mean {
         out.extend_from_slice(&m.to_le_bytes());
-    }
-    if g.k == 0 {
-        return;
     }
     out.extend(g.basis.iter().map(|&b| b as u8));
     varint(out, g.times.len() as u32);
@@ -154,12 +157,17 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
         for &n in &sizes {
             let k = r.u8()? as usize;
             r.u8()?;
-            r.skip(2 * n)?;
-            info.mean_bytes += 2 * n + 2;
             if k == 0 {
+                let from = r.at;
+                for _ in 0..n {
+                    r.varint()?;
+                }
+                info.mean_bytes += r.at - from + 2;
                 per.push((0, 0));
                 continue;
             }
+            r.skip(2 * n)?;
+            info.mean_bytes += 2 * n + 2;
             r.skip(n * k)?;
             info.basis_bytes += n * k;
             let from = r.at;
