@@ -63,7 +63,8 @@ pub struct Player<'a, const N: usize> {
     /// Where the `pca-spline` codec is in its segment list.
     #[cfg(feature = "codec-pca-spline")]
     segment: Cursor,
-    /// `index`: the frame `state_frame`; `pca-spline`: blending scratch.
+    /// `index`: the frame `state_frame`; `pca-spline`: its cache of key
+    /// intervals (a larger `N` caches more groups).
     state: [i32; N],
 }
 
@@ -140,8 +141,7 @@ impl<'a, const N: usize> Player<'a, N> {
         match &self.codec {
             #[cfg(feature = "codec-pca-spline")]
             Codec::PcaSpline(c) => {
-                let scratch = self.state.get_mut(..self.channels).unwrap_or(&mut []);
-                c.decode_at(pos, &mut self.segment, out, scratch);
+                c.decode_at(pos, &mut self.segment, out, &mut self.state);
                 true
             }
             _ => {

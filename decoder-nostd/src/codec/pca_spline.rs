@@ -53,7 +53,8 @@ struct Segment<'a> {
     next: usize,
 }
 
-/// The per-group parameters read before the key bits (§5.3).
+/// The per-group parameters read before the key bits (§5.3). Small on
+/// purpose: it is rebuilt for every group of every pose.
 struct GroupHead<'a> {
     k: usize,
     mean_shift: u32,
@@ -61,9 +62,10 @@ struct GroupHead<'a> {
     basis: &'a [u8],
     keys: u32,
     time_bits: u32,
-    width: [u8; K_MAX],
-    shift: [u8; K_MAX],
-    offset: [i32; K_MAX],
+    /// The `k` (width, shift, offset) records, still encoded.
+    comps: &'a [u8],
+    /// Σ width: bits per key row.
+    row_bits: u32,
     bits: &'a [u8],
 }
 
@@ -314,31 +316,43 @@ impl<'a> PcaSplineCodec<'a> {
     }
 
     /// Decodes the pose at `pos` (frames, 16.16; at most the last frame)
-    /// into `out`, using `scratch` (as long as `out`) while blending two
-    /// segments. `cursor` remembers the segment for the next call.
+    /// into `out`. `cursor` remembers the segment for the next call;
+    /// `cache` (any length, its content is the decoder's own) keeps the
+    /// current key interval of each group of that segment so that poses
+    /// inside one interval skip the bit reading (§6: the output never
+    /// depends on it).
     pub(crate) fn decode_at(
         &self,
         pos: u64,
         cursor: &mut Cursor,
         out: &mut [i32],
-        scratch: &mut [i32],
+        cache: &mut [i32],
     ) {
         let frame = u32::try_from(pos >> FRAC_BITS).unwrap_or(u32::MAX);
         let Some((prev, cur, next)) = self.locate(frame, cursor) else {
             return;
         };
         self.write_consts(out);
-        // A blend window (§5.3) around the start of `cur` or of `next`.
+        // A blend window (§5.2) around the start of `cur` or of `next`:
+        // (earlier, later, which of them is `cur`).
         let window = match (prev, next) {
-            (Some(p), _) if pos < (u64::from(p.end) + 1) << FRAC_BITS => Some((p, cur)),
+            (Some(p), _) if pos < (u64::from(p.end) + 1) << FRAC_BITS => Some((p, cur, false)),
             (_, Some(n)) if pos > u64::from(n.start.saturating_sub(1)) << FRAC_BITS => {
-                Some((cur, n))
+                Some((cur, n, true))
             }
             _ => None,
         };
         match window {
-            None => self.eval_segment(&cur, pos, out),
-            Some((a, b)) => self.blend(&a, &b, pos, out, scratch),
+            None => self.eval(&cur, None, pos, out, cache),
+            Some((a, b, cur_first)) => {
+                // w = (pos - (S - 1)) / (E - S + 2), 16.16, S = b.start,
+                // E = a.end.
+                let from = u64::from(b.start.saturating_sub(1)) << FRAC_BITS;
+                let steps = u64::from(a.end.saturating_add(2).saturating_sub(b.start)).max(1);
+                let w = (pos.saturating_sub(from) / steps).min(1 << FRAC_BITS) as i64;
+                let (cached, other) = if cur_first { (a, b) } else { (b, a) };
+                self.eval(&cached, Some((&other, w, cur_first)), pos, out, cache);
+            }
         }
         // Patches at the two frames around pos, each weighted by its hat
         // function (§5.5).
@@ -351,29 +365,6 @@ impl<'a> PcaSplineCodec<'a> {
                 Some(n) if n.start == after => self.apply_patches(&n, 0, frac, out),
                 _ => self.apply_patches(&cur, after.wrapping_sub(cur.start), frac, out),
             }
-        }
-    }
-
-    /// The blend of two segments' poses over their window (§5.3).
-    fn blend(
-        &self,
-        a: &Segment<'a>,
-        b: &Segment<'a>,
-        pos: u64,
-        out: &mut [i32],
-        scratch: &mut [i32],
-    ) {
-        self.eval_segment(a, pos, out);
-        self.write_consts(scratch);
-        self.eval_segment(b, pos, scratch);
-        // w = (pos - (S - 1)) / (E - S + 2), 16.16, with S = b.start and
-        // E = a.end.
-        let from = u64::from(b.start.saturating_sub(1)) << FRAC_BITS;
-        let steps = u64::from(a.end.saturating_add(2).saturating_sub(b.start)).max(1);
-        let w = (pos.saturating_sub(from) / steps).min(1 << FRAC_BITS) as i64;
-        for (o, &s) in out.iter_mut().zip(scratch.iter()) {
-            let d = i64::from(s.wrapping_sub(*o));
-            *o = o.wrapping_add(((d * w) >> FRAC_BITS) as i32);
         }
     }
 
@@ -418,36 +409,162 @@ impl<'a> PcaSplineCodec<'a> {
         }
     }
 
-    /// Evaluates every group of `seg` at `pos` (clamped into the segment).
-    fn eval_segment(&self, seg: &Segment<'a>, pos: u64, out: &mut [i32]) {
-        let first = u64::from(seg.start) << FRAC_BITS;
-        let rel = pos
-            .saturating_sub(first)
-            .min(u64::from(seg.end - seg.start) << FRAC_BITS);
+    /// Evaluates every group of `seg` at `pos` (clamped into the segment),
+    /// through the cache; with `other = (segment, w, seg_is_earlier)` each
+    /// channel is the blend of the two segments' values with weight `w` on
+    /// the later one (§5.4 step 4).
+    fn eval(
+        &self,
+        seg: &Segment<'a>,
+        other: Option<(&Segment<'a>, i64, bool)>,
+        pos: u64,
+        out: &mut [i32],
+        cache: &mut [i32],
+    ) {
+        // cache[0] names the segment the slots belong to (start + 1).
+        let owner = seg.start.wrapping_add(1) as i32;
+        let fresh = cache.first() != Some(&owner);
+        if let Some(c) = cache.first_mut() {
+            *c = owner;
+        }
+        let mut slots = cache.get_mut(1..).unwrap_or(&mut []);
+        let rel = relative(seg, pos);
         let mut g = Reader::new(self.groups);
         let mut body = Reader::new(seg.body);
+        let mut body_b = other.map(|(o, _, _)| (Reader::new(o.body), relative(o, pos)));
         for _ in 0..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
             let idx = g.take(n * self.width()).unwrap_or(&[]);
-            let Some(head) = read_group(&mut body, n) else {
+            let k = body.clone().u8().map_or(0, usize::from);
+            let want = if k == 0 { 0 } else { SLOT_HEAD + 4 * k };
+            let (slot, rest) = if slots.len() >= want {
+                let (slot, rest) = core::mem::take(&mut slots).split_at_mut(want);
+                (Some(slot), rest)
+            } else {
+                (None, core::mem::take(&mut slots))
+            };
+            slots = rest;
+            let mut coef = [0i32; K_MAX];
+            let Some(head) = group_at(&mut body, n, rel, &mut coef, slot, fresh) else {
                 return;
             };
-            let mut coef = [0i32; K_MAX];
-            head.coefficients(rel, &mut coef);
             let coef = coef.get(..head.k).unwrap_or(&[]);
-            if self.wide {
-                reconstruct::<true>(idx, &head, coef, out);
-            } else {
-                reconstruct::<false>(idx, &head, coef, out);
+            match &mut body_b {
+                None => {
+                    if self.wide {
+                        reconstruct::<true>(idx, &head, coef, out);
+                    } else {
+                        reconstruct::<false>(idx, &head, coef, out);
+                    }
+                }
+                Some((rb, rel_b)) => {
+                    let mut coef_b = [0i32; K_MAX];
+                    let Some(head_b) = group_at(rb, n, *rel_b, &mut coef_b, None, true) else {
+                        return;
+                    };
+                    let coef_b = coef_b.get(..head_b.k).unwrap_or(&[]);
+                    let (_, w, seg_first) = other.unwrap_or((seg, 0, true));
+                    // (earlier, later) for the blend.
+                    let (ea, la) = if seg_first {
+                        ((&head, coef), (&head_b, coef_b))
+                    } else {
+                        ((&head_b, coef_b), (&head, coef))
+                    };
+                    blend_group(idx, self.wide, ea, la, w, out);
+                }
             }
         }
     }
 }
 
+/// Header words of a cache slot: interval, record length, four key times.
+const SLOT_HEAD: usize = 6;
+
+/// `pos` relative to the segment's start, clamped into it.
+fn relative(seg: &Segment<'_>, pos: u64) -> u64 {
+    pos.saturating_sub(u64::from(seg.start) << FRAC_BITS)
+        .min(u64::from(seg.end - seg.start) << FRAC_BITS)
+}
+
+/// Reads the next group record of a segment body and its coefficients at
+/// `rel`. A cache `slot` (6 + 4k words) that holds the interval of `rel`
+/// spares the bit reading; otherwise it is refilled.
+fn group_at<'a>(
+    body: &mut Reader<'a>,
+    n: usize,
+    rel: u64,
+    coef: &mut [i32; K_MAX],
+    slot: Option<&mut [i32]>,
+    fresh: bool,
+) -> Option<GroupHead<'a>> {
+    if let Some(slot) = slot {
+        if !fresh {
+            if let Some(head) = cached(body, n, rel, coef, slot) {
+                return Some(head);
+            }
+        }
+        let start = body.clone();
+        let head = read_group(body, n)?;
+        head.coefficients(rel, coef, Some(slot));
+        if let Some(len) = slot.get_mut(1) {
+            *len = (body.pos() - start.pos()) as i32;
+        }
+        return Some(head);
+    }
+    let head = read_group(body, n)?;
+    head.coefficients(rel, coef, None);
+    Some(head)
+}
+
+/// A cache hit: `rel` lies in the slot's interval. Skips the record and
+/// evaluates the cached control points.
+fn cached<'a>(
+    body: &mut Reader<'a>,
+    n: usize,
+    rel: u64,
+    coef: &mut [i32; K_MAX],
+    slot: &[i32],
+) -> Option<GroupHead<'a>> {
+    let [interval, len, ta, t1, t2, tb] = *slot.get(..SLOT_HEAD)? else {
+        return None;
+    };
+    let t = [ta, t1, t2, tb].map(|t| t as u32);
+    let inside = interval >= 0
+        && u64::from(t[1]) << FRAC_BITS <= rel
+        && (rel < u64::from(t[2]) << FRAC_BITS || t[2] == t[3]);
+    if !inside {
+        return None;
+    }
+    let mut rec = Reader::new(body.clone().take(usize::try_from(len).ok()?)?);
+    let k = usize::from(rec.u8()?);
+    let mean_shift = u32::from(rec.u8()?);
+    let mean = rec.take(n.checked_mul(2)?)?;
+    let basis = rec.take(n.checked_mul(k)?)?;
+    body.take(usize::try_from(len).ok()?)?;
+    let w = spline::weights(t, rel);
+    let controls = slot.get(SLOT_HEAD..)?;
+    for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)).take(k) {
+        if let [a, b, c2, d] = *p {
+            *c = spline::apply(w, [a, b, c2, d]);
+        }
+    }
+    Some(GroupHead {
+        k,
+        mean_shift,
+        mean,
+        basis,
+        keys: 0,
+        time_bits: 0,
+        comps: &[],
+        row_bits: 0,
+        bits: &[],
+    })
+}
+
 impl GroupHead<'_> {
     /// The spline's value of every component at `rel` (16.16 frames from
     /// the segment start), §5.4.
-    fn coefficients(&self, rel: u64, coef: &mut [i32; K_MAX]) {
+    fn coefficients(&self, rel: u64, coef: &mut [i32; K_MAX], mut slot: Option<&mut [i32]>) {
         if self.k == 0 {
             return;
         }
@@ -470,25 +587,34 @@ impl GroupHead<'_> {
         let rows = [i.saturating_sub(1), i, i + 1, (i + 2).min(last)];
         let t = rows.map(time);
         let w = spline::weights(t, rel);
-        let row_bits: u64 = self.width.iter().take(self.k).map(|&w| u64::from(w)).sum();
-        let base = u64::from(m) * u64::from(self.time_bits);
-        let mut p = [[0i32; 4]; K_MAX];
-        for (r, &row) in rows.iter().enumerate() {
-            let mut bits = BitReader::at(self.bits, base + u64::from(row) * row_bits);
-            for j in 0..self.k {
-                let (Some(&wd), Some(&sh), Some(&off)) =
-                    (self.width.get(j), self.shift.get(j), self.offset.get(j))
-                else {
-                    return;
-                };
-                let code = read_wide(&mut bits, u32::from(wd));
-                if let Some(slot) = p.get_mut(j).and_then(|pj| pj.get_mut(r)) {
-                    *slot = off.wrapping_add((code as i32).wrapping_shl(u32::from(sh)));
-                }
-            }
+        if let Some([interval, _, ta, t1, t2, tb]) =
+            slot.as_deref_mut().and_then(|s| s.get_mut(..SLOT_HEAD))
+        {
+            *interval = i as i32;
+            [*ta, *t1, *t2, *tb] = t.map(|t| t as i32);
         }
-        for (c, pj) in coef.iter_mut().zip(p.iter()).take(self.k) {
-            *c = spline::apply(w, *pj);
+        // The four key rows are read in lockstep, one component at a time.
+        let base = u64::from(m) * u64::from(self.time_bits);
+        let mut readers = rows
+            .map(|row| BitReader::at(self.bits, base + u64::from(row) * u64::from(self.row_bits)));
+        let mut comps = Reader::new(self.comps);
+        let mut controls = slot
+            .and_then(|s| s.get_mut(SLOT_HEAD..))
+            .unwrap_or(&mut [])
+            .chunks_exact_mut(4);
+        for c in coef.iter_mut().take(self.k) {
+            let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32())
+            else {
+                return;
+            };
+            let (wd, sh) = (u32::from(wd), u32::from(sh));
+            let p = readers
+                .each_mut()
+                .map(|r| off.wrapping_add((read_wide(r, wd) as i32).wrapping_shl(sh)));
+            if let Some(dst) = controls.next() {
+                dst.copy_from_slice(&p);
+            }
+            *c = spline::apply(w, p);
         }
     }
 }
@@ -511,16 +637,76 @@ fn reconstruct<const WIDE: bool>(idx: &[u8], head: &GroupHead<'_>, coef: &[i32],
         return;
     }
     for ((c, m), row) in indices.zip(means).zip(rows) {
-        let mean = mean_of(m);
-        let mut acc: i32 = 1 << (BASIS_SHIFT - 1);
-        for (&b, &a) in row.iter().zip(coef) {
-            acc = acc.wrapping_add(i32::from(b as i8).wrapping_mul(a));
-        }
+        let v = channel_value(head, mean_of(m), row, coef);
         if let Some(o) = out.get_mut(c) {
-            *o = mean
-                .wrapping_shl(head.mean_shift)
-                .wrapping_add(acc >> BASIS_SHIFT);
+            *o = v;
         }
+    }
+}
+
+/// One channel's value from a group (row `row` of the basis).
+#[inline(always)]
+fn channel_value(head: &GroupHead<'_>, mean: i32, row: &[u8], coef: &[i32]) -> i32 {
+    let mut acc: i32 = 1 << (BASIS_SHIFT - 1);
+    for (&b, &a) in row.iter().zip(coef) {
+        acc = acc.wrapping_add(i32::from(b as i8).wrapping_mul(a));
+    }
+    mean.wrapping_shl(head.mean_shift)
+        .wrapping_add(acc >> BASIS_SHIFT)
+}
+
+/// Blends one group of two segments channel by channel: `a + (b − a)·w`.
+fn blend_group(
+    idx: &[u8],
+    wide: bool,
+    (ha, ca): (&GroupHead<'_>, &[i32]),
+    (hb, cb): (&GroupHead<'_>, &[i32]),
+    w: i64,
+    out: &mut [i32],
+) {
+    // Values of a k = 0 group come from varints: decode both sides into
+    // `out` one channel at a time.
+    let mut va = GroupValues::new(ha, ca);
+    let mut vb = GroupValues::new(hb, cb);
+    for c in Indices::new(idx, wide) {
+        let (Some(a), Some(b)) = (va.next(), vb.next()) else {
+            return;
+        };
+        if let Some(o) = out.get_mut(c) {
+            let d = i64::from(b.wrapping_sub(a));
+            *o = a.wrapping_add(((d * w) >> FRAC_BITS) as i32);
+        }
+    }
+}
+
+/// The values of a group's channels in order.
+struct GroupValues<'h, 'a> {
+    head: &'h GroupHead<'a>,
+    coef: &'h [i32],
+    means: Reader<'a>,
+    row: usize,
+}
+
+impl<'h, 'a> GroupValues<'h, 'a> {
+    fn new(head: &'h GroupHead<'a>, coef: &'h [i32]) -> Self {
+        GroupValues {
+            head,
+            coef,
+            means: Reader::new(head.mean),
+            row: 0,
+        }
+    }
+
+    fn next(&mut self) -> Option<i32> {
+        let h = self.head;
+        if h.k == 0 {
+            return Some(self.means.zigzag_i32()?.wrapping_shl(h.mean_shift));
+        }
+        let mean = mean_of(self.means.take(2)?);
+        let at = self.row * h.k;
+        let row = h.basis.get(at..at + h.k)?;
+        self.row += 1;
+        Some(channel_value(h, mean, row, self.coef))
     }
 }
 
@@ -568,9 +754,8 @@ fn read_group<'a>(r: &mut Reader<'a>, n: usize) -> Option<GroupHead<'a>> {
         basis: &[],
         keys: 0,
         time_bits: 0,
-        width: [0; K_MAX],
-        shift: [0; K_MAX],
-        offset: [0; K_MAX],
+        comps: &[],
+        row_bits: 0,
         bits: &[],
     };
     if k == 0 {
@@ -583,19 +768,20 @@ fn read_group<'a>(r: &mut Reader<'a>, n: usize) -> Option<GroupHead<'a>> {
         return None;
     }
     head.time_bits = u32::from(time_bits);
-    let mut row_bits = 0u64;
-    for j in 0..k {
+    let comps_at = r.clone();
+    let mut row_bits = 0u32;
+    for _ in 0..k {
         let w = r.u8()?;
         let s = r.u8()?;
         if w > MAX_VALUE_BITS || s > MAX_VALUE_SHIFT {
             return None;
         }
-        *head.width.get_mut(j)? = w;
-        *head.shift.get_mut(j)? = s;
-        *head.offset.get_mut(j)? = r.zigzag_i32()?;
-        row_bits += u64::from(w);
+        r.zigzag_i32()?;
+        row_bits += u32::from(w);
     }
-    let total = u64::from(head.keys) * (u64::from(head.time_bits) + row_bits);
+    head.comps = comps_at.clone().take(r.pos() - comps_at.pos())?;
+    head.row_bits = row_bits;
+    let total = u64::from(head.keys) * u64::from(head.time_bits + row_bits);
     head.bits = r.take(usize::try_from(total.div_ceil(8)).ok()?)?;
     Some(head)
 }

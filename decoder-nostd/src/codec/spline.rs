@@ -17,6 +17,37 @@ const ONE: i64 = 1 << FRAC_BITS;
 /// clamped into it. Requires `t[0] <= t[1] < t[2] <= t[3]`; anything else
 /// yields the weights of the nearest control point.
 pub fn weights(t: [u32; 4], pos: u64) -> [i32; 4] {
+    let [t0, t1, t2, t3] = t;
+    if t0 <= t1 && t1 < t2 && t2 <= t3 && t3 < 1 << 15 {
+        return weights_short(t, pos);
+    }
+    weights_long(t, pos)
+}
+
+/// [`weights`] for key times below 2^15 (every valid segment): the same
+/// numbers with 32-bit divisions, which Cortex-M3/M4 do in one instruction.
+#[inline]
+fn weights_short(t: [u32; 4], pos: u64) -> [i32; 4] {
+    let [t0, t1, t2, t3] = t;
+    let span = t2 - t1;
+    let from = t1 << FRAC_BITS;
+    let pos = (pos.min(u64::from(t2) << FRAC_BITS) as u32).max(from);
+    let u = (pos - from) / span;
+    let u2 = ((u64::from(u) * u64::from(u)) >> FRAC_BITS) as i64;
+    let u3 = (u2 * i64::from(u)) >> FRAC_BITS;
+    let u = i64::from(u);
+    let h00 = 2 * u3 - 3 * u2 + ONE;
+    let h10 = u3 - 2 * u2 + u;
+    let h01 = 3 * u2 - 2 * u3;
+    let h11 = u3 - u2;
+    let ra = i64::from((span << FRAC_BITS) / (t2 - t0));
+    let rb = i64::from((span << FRAC_BITS) / (t3 - t1));
+    let x = (h10 * ra) >> FRAC_BITS;
+    let y = (h11 * rb) >> FRAC_BITS;
+    [-x, h00 - y, h01 + x, y].map(|w| w as i32)
+}
+
+fn weights_long(t: [u32; 4], pos: u64) -> [i32; 4] {
     let [t0, t1, t2, t3] = t.map(i64::from);
     if !(t0 <= t1 && t1 < t2 && t2 <= t3) {
         return [0, 1 << FRAC_BITS, 0, 0];
@@ -79,6 +110,26 @@ mod tests {
                 let want = (pos * 1000 / 65536) as i32;
                 assert!((v - want).abs() <= 1, "{pos}: {v} vs {want}");
             }
+        }
+    }
+
+    #[test]
+    fn short_and_long_forms_agree() {
+        let mut x = 12345u64;
+        let mut next = |n: u64| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 33) % n
+        };
+        for _ in 0..20_000 {
+            let t1 = next(30_000) as u32;
+            let t0 = t1 - next(u64::from(t1) + 1) as u32;
+            let t2 = t1 + 1 + next(2000) as u32;
+            let t3 = t2 + next(2000) as u32;
+            let t = [t0, t1, t2, t3];
+            let pos = (u64::from(t1) << 16) + next((u64::from(t2 - t1) << 16) + 1);
+            assert_eq!(weights_short(t, pos), weights_long(t, pos), "{t:?} {pos}");
         }
     }
 
