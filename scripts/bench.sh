@@ -53,6 +53,28 @@ for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
     echo "| $core | $board | $(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\).*/\1/p' "$out/uart-$board.txt") | $((pc / 100)).$(printf %02d $((pc % 100))) | $(get parse_instructions) | $(get player_new_instructions) | $(get stack_bytes_used) | $(get state_bytes) |"
 done
 echo
+pca_src="$corpus/cmu/35_01.bvh"
+"$mocap" encode "$pca_src" -o "$out/pca.mcb" --codec pca-spline --max-error 50mm+arms:10mm >/dev/null 2>&1
+echo "## pca-spline decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 50 mm + ARMS 10 mm, $(stat -c %s "$out/pca.mcb") bytes"
+echo
+echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | stack used B |"
+echo "|---|---|---|---|---|---|---|"
+for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
+    board=${b%%:*}; core=${b##*:}
+    for mode in frames:0 "sample_at 50 Hz":20000; do
+        name=${mode%%:*}; us=${mode##*:}
+        extra=(); [ "$us" != 0 ] && extra=(--sample-us "$us")
+        bash scripts/firmware.sh run --board "$board" --clip "$out/pca.mcb" --icount "${extra[@]}" \
+            2>/dev/null >"$out/uart-pca-$board-$us.txt"
+        line=$(grep '^# decode_instructions_total=' "$out/uart-pca-$board-$us.txt")
+        per=$(sed -n 's/.* per_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
+        pc=$(sed -n 's/.* per_channel_x100=\([0-9]*\).*/\1/p' <<<"$line")
+        worst=$(sed -n 's/.* max_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
+        stack=$(sed -n 's/^# stack_bytes_used=\([0-9]*\).*/\1/p' "$out/uart-pca-$board-$us.txt")
+        echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $stack |"
+    done
+done
+echo
 echo "## Flash (opt-level = \"s\", LTO), same clip"
 echo
 echo '```text'

@@ -328,16 +328,24 @@ fn first_difference(a: &[Vec<i32>], b: &[Vec<i32>]) -> Option<(usize, usize)> {
 
 /// Channel weights for the `pca-spline` tolerance: millimetres of joint
 /// movement per fixed-point unit under a position bound (rotation: the
-/// joint's lever arm; feet and toes count double, as in the paper), else
-/// degrees per millidegree and millimetres per micrometre.
+/// joint's lever arm, blended with its RMS lever under an ARMS bound; feet
+/// and toes count double, as in the paper), else degrees per millidegree
+/// and millimetres per micrometre.
 pub fn pca_weights(
     m: &Motion,
     levers_um: &[f64],
     joint_of: &[usize],
     kinds: &[ChannelKind],
     mm: bool,
+    arms: bool,
 ) -> Vec<f64> {
     let longest = levers_um.iter().fold(0.0f64, |a, &b| a.max(b));
+    // Under an ARMS bound a channel also counts by how many joints it
+    // moves: blend in its RMS lever (scaled to the same total).
+    let beta = if arms { 0.3 } else { 0.0 };
+    let rms = kinematics::rms_levers(&m.skeleton);
+    let (sl, sr): (f64, f64) = (levers_um.iter().sum(), rms.iter().sum());
+    let kappa = if sr > 0.0 { sl / sr } else { 0.0 };
     kinds
         .iter()
         .enumerate()
@@ -355,7 +363,8 @@ pub fn pca_weights(
             let foot = ["foot", "toe", "ankle"].iter().any(|f| name.contains(f));
             // Joints that move nothing measured still get a small weight
             // so they do not wander.
-            let lever_mm = (levers_um[j] / 1000.0).max(longest / 1000.0 * 0.02);
+            let mixed = (1.0 - beta) * levers_um[j] + beta * kappa * rms[j];
+            let lever_mm = (mixed / 1000.0).max(longest / 1000.0 * 0.02);
             let w = lever_mm * std::f64::consts::PI / 180.0 / 1000.0;
             if foot {
                 2.0 * w
@@ -446,7 +455,14 @@ fn encode_pca(
     joint_of: &[usize],
 ) -> Result<Encoded, String> {
     let mm = opts.bound.positional();
-    let weights = pca_weights(m, levers_um, joint_of, &fixed.kinds, mm);
+    let weights = pca_weights(
+        m,
+        levers_um,
+        joint_of,
+        &fixed.kinds,
+        mm,
+        opts.bound.arms_mm.is_some(),
+    );
     let groups = pca_groups(m, 9);
     let input = pca_spline::Input {
         values: &fixed.values,

@@ -137,6 +137,27 @@ pub fn lever_arms(skeleton: &Skeleton) -> Vec<f64> {
     lever
 }
 
+/// For each joint, the RMS over *all* joints of the rest-pose distance
+/// from that joint to each of its descendants (non-descendants count as
+/// 0): a rotation error of θ radians at the joint adds at most
+/// `θ · rms_levers[j]` to the frame's RMS joint error (ARMS).
+pub fn rms_levers(skeleton: &Skeleton) -> Vec<f64> {
+    let rest = vec![0.0; skeleton.channel_count()];
+    let mut pos = Vec::new();
+    joint_positions(skeleton, &rest, &mut pos);
+    let mut sum = vec![0.0f64; skeleton.joints.len()];
+    for (j, p) in pos.iter().enumerate() {
+        let mut ancestor = skeleton.joints[j].parent;
+        while let Some(a) = ancestor {
+            let q = pos[a];
+            sum[a] += (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+            ancestor = skeleton.joints[a].parent;
+        }
+    }
+    let n = skeleton.joints.len().max(1) as f64;
+    sum.into_iter().map(|s| (s / n).sqrt()).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

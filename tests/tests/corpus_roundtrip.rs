@@ -91,11 +91,11 @@ fn iclone_at_20mm() {
 
 #[test]
 fn pca_spline_cmu_at_50mm_and_arms_10mm() {
-    // Issue 3's operating point. Measured 39.2:1 (BENCHMARKS.md); the
-    // guard catches regressions, the target (50:1) is reported, not
-    // asserted.
+    // Issue 3's operating point: target 50:1, measured 50.90:1
+    // (BENCHMARKS.md); the guard leaves a little room for floating-point
+    // differences between machines.
     let r = roundtrip("cmu", CodecChoice::PcaSpline, "50mm+arms:10mm");
-    assert!(r.is_nan() || r >= 35.0, "aggregate ratio {r:.2}");
+    assert!(r.is_nan() || r >= 49.0, "aggregate ratio {r:.2}");
 }
 
 #[test]
@@ -106,7 +106,7 @@ fn pca_spline_cmu_at_1deg() {
 #[test]
 fn pca_spline_iclone_at_50mm_and_arms_10mm() {
     let r = roundtrip("iclone-cmu", CodecChoice::PcaSpline, "50mm+arms:10mm");
-    assert!(r.is_nan() || r >= 22.0, "aggregate ratio {r:.2}");
+    assert!(r.is_nan() || r >= 31.0, "aggregate ratio {r:.2}");
 }
 
 #[test]
