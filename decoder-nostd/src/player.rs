@@ -46,9 +46,12 @@ pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
 
 /// Plays a clip of at most `N` channels.
 ///
-/// State: the codec view (a few slices) and one frame of `N` values, so
-/// `size_of::<Player<N>>()` is `4·N + 80` bytes on a 32-bit MCU (measured
-/// on thumbv6m/7m/7em; BENCHMARKS.md).
+/// State: the codec view (a few slices), a segment cursor and `N` words —
+/// the `index` codec's current frame, or the `pca-spline` codec's cache of
+/// key intervals (`6 + 4k` words per group of `k` components; with less
+/// room the same values are decoded, more slowly) — so
+/// `size_of::<Player<N>>()` is `4·N + 104` bytes on a 32-bit MCU
+/// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
 #[derive(Clone, Debug)]
 pub struct Player<'a, const N: usize> {
