@@ -12,6 +12,7 @@ pub mod generate;
 pub mod kinematics;
 pub mod metrics;
 pub mod motion;
+pub mod play;
 pub mod plot;
 pub mod rig;
 pub mod track;

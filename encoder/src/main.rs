@@ -118,6 +118,50 @@ enum Command {
         #[arg(long)]
         plot: Option<PathBuf>,
     },
+    /// Play a clip through a servo rig: servo-controller commands to a port or a file.
+    Play {
+        /// Input .mcb clip.
+        clip: PathBuf,
+        /// Rig file (TOML, see assets/rigs/README.md).
+        #[arg(long)]
+        rig: PathBuf,
+        /// Servo controller protocol.
+        #[arg(long, value_enum)]
+        protocol: mocap_encoder::play::Protocol,
+        /// Serial device to write to (e.g. /dev/ttyACM0; configure its baud
+        /// rate beforehand, e.g. `stty -F /dev/ttyUSB0 115200 raw`).
+        #[arg(long, conflicts_with = "output", required_unless_present = "output")]
+        port: Option<PathBuf>,
+        /// Write the byte stream to this file instead of a port.
+        #[arg(long)]
+        output: Option<PathBuf>,
+        /// Do not pace the ticks in real time.
+        #[arg(long)]
+        fast: bool,
+        /// Servo ticks per second (default: the rig's rate_hz).
+        #[arg(long)]
+        rate: Option<f64>,
+    },
+    /// Stream a clip to the firmware's streaming mode (postcard + COBS + CRC frames).
+    Send {
+        /// Input .mcb clip.
+        clip: PathBuf,
+        /// Serial device to write to.
+        #[arg(long, conflicts_with = "output", required_unless_present = "output")]
+        port: Option<PathBuf>,
+        /// Write the frames to this file instead of a port.
+        #[arg(long)]
+        output: Option<PathBuf>,
+        /// Do not pace the frames at the line rate.
+        #[arg(long)]
+        fast: bool,
+        /// Line rate used for pacing, bit/s (8N1).
+        #[arg(long, default_value_t = 115_200)]
+        baud: u32,
+        /// Ask the firmware to loop the clip.
+        #[arg(long = "loop")]
+        looped: bool,
+    },
     /// Motion Track picture (Hu et al. 2010): clips as curves in a 2-D map of key poses.
     Track(mocap_encoder::track::TrackArgs),
     /// Write the procedural demo clip the project ships.
@@ -361,6 +405,76 @@ fn run(cli: Cli) -> Result<(), String> {
                 mocap_encoder::plot::rate_distortion_plot(&p, &rows)?;
                 eprintln!("wrote {}", p.display());
             }
+            Ok(())
+        }
+        Command::Play {
+            clip,
+            rig,
+            protocol,
+            port,
+            output,
+            fast,
+            rate,
+        } => {
+            let bytes = read_clip(&clip)?;
+            let c = Clip::parse(&bytes).map_err(|e| format!("{}: {e}", clip.display()))?;
+            let rig = mocap_encoder::rig::Rig::read_file(&rig).map_err(|e| e.to_string())?;
+            let rate = rate.unwrap_or(rig.rate_hz);
+            let s = mocap_encoder::play::servo_stream(&c, &rig, protocol, rate)?;
+            eprint!("{}", s.tracks);
+            let dest = port.or(output).ok_or("give --port or --output")?;
+            let mut file =
+                std::fs::File::create(&dest).map_err(|e| format!("{}: {e}", dest.display()))?;
+            let period = std::time::Duration::from_secs_f64(1.0 / rate);
+            let start = std::time::Instant::now();
+            for (i, tick) in s.ticks.iter().enumerate() {
+                if !fast {
+                    let due = start + period * i as u32;
+                    std::thread::sleep(due.saturating_duration_since(std::time::Instant::now()));
+                }
+                std::io::Write::write_all(&mut file, tick)
+                    .map_err(|e| format!("{}: {e}", dest.display()))?;
+            }
+            eprintln!(
+                "{}: {} ticks at {rate} Hz ({} of the clip, {} back to neutral), {} bytes",
+                dest.display(),
+                s.ticks.len(),
+                s.clip_ticks,
+                s.ticks.len() - s.clip_ticks,
+                s.ticks.iter().map(Vec::len).sum::<usize>()
+            );
+            Ok(())
+        }
+        Command::Send {
+            clip,
+            port,
+            output,
+            fast,
+            baud,
+            looped,
+        } => {
+            let bytes = read_clip(&clip)?;
+            Clip::parse(&bytes).map_err(|e| format!("{}: {e}", clip.display()))?;
+            let frames = mocap_encoder::play::clip_frames(&bytes, looped)?;
+            let dest = port.or(output).ok_or("give --port or --output")?;
+            let mut file =
+                std::fs::File::create(&dest).map_err(|e| format!("{}: {e}", dest.display()))?;
+            for f in &frames {
+                std::io::Write::write_all(&mut file, f)
+                    .map_err(|e| format!("{}: {e}", dest.display()))?;
+                if !fast {
+                    // 10 bits per byte on an 8N1 line.
+                    std::thread::sleep(std::time::Duration::from_secs_f64(
+                        f.len() as f64 * 10.0 / f64::from(baud.max(1)),
+                    ));
+                }
+            }
+            eprintln!(
+                "{}: {} frames, {} bytes",
+                dest.display(),
+                frames.len(),
+                frames.iter().map(Vec::len).sum::<usize>()
+            );
             Ok(())
         }
         Command::Track(args) => mocap_encoder::track::run(&args),

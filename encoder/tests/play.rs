@@ -1,0 +1,169 @@
+//! `mocap play` / `mocap send` byte streams: every command parses back,
+//! stays inside the rig's pulse limits and speed, the stream ends at
+//! neutral; corrupt clips are refused or still produce only in-limit
+//! commands; `send` frames reassemble the clip exactly.
+
+use std::path::Path;
+
+use mocap_decoder::Clip;
+use mocap_encoder::play::{clip_frames, servo_stream, Protocol, ServoStream};
+use mocap_encoder::rig::Rig;
+use mocap_servo::{FrameReceiver, Message};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap()
+}
+
+fn demo() -> (Vec<u8>, Rig) {
+    let clip = std::fs::read(root().join("firmware-example/clips/demo.mcb")).unwrap();
+    let rig = Rig::read_file(&root().join("assets/rigs/animatronic_demo.toml")).unwrap();
+    (clip, rig)
+}
+
+/// Parses a Maestro stream back into (channel, target) commands.
+fn maestro_commands(bytes: &[u8]) -> Vec<(u8, u16)> {
+    assert_eq!(bytes.len() % 4, 0);
+    bytes
+        .chunks(4)
+        .map(|c| {
+            assert_eq!(c[0], 0x84, "Set Target");
+            assert!(c[1] < 0x80 && c[2] < 0x80 && c[3] < 0x80);
+            (c[1], u16::from(c[2]) | u16::from(c[3]) << 7)
+        })
+        .collect()
+}
+
+fn check_limits(s: &ServoStream, rig: &Rig) {
+    assert!(s.ticks.len() > s.clip_ticks, "no return to neutral");
+    for (i, pulses) in s.pulses.iter().enumerate() {
+        for (j, (&p, l)) in pulses.iter().zip(&s.limits).enumerate() {
+            assert!(
+                l.min_qus <= p && p <= l.max_qus,
+                "tick {i} servo {}: {p} outside [{}, {}]",
+                rig.servos[j].name,
+                l.min_qus,
+                l.max_qus
+            );
+            if i > 0 && l.max_step_qus > 0 {
+                let d = p.abs_diff(s.pulses[i - 1][j]);
+                assert!(d <= l.max_step_qus, "tick {i} servo {j}: step {d}");
+            }
+        }
+    }
+    let last = s.pulses.last().unwrap();
+    for (p, l) in last.iter().zip(&s.limits) {
+        assert_eq!(*p, l.neutral_qus, "ends at neutral");
+    }
+}
+
+#[test]
+fn maestro_stream_parses_back_within_limits() {
+    let (bytes, rig) = demo();
+    let clip = Clip::parse(&bytes).unwrap();
+    let s = servo_stream(&clip, &rig, Protocol::Maestro, 50.0).unwrap();
+    check_limits(&s, &rig);
+    // 50 Hz over the 8 s clip: 401 ticks, then the way back to neutral.
+    assert_eq!(s.clip_ticks, 401);
+    let commands = maestro_commands(&s.bytes());
+    assert_eq!(commands.len(), s.ticks.len() * rig.servos.len());
+    for (k, &(ch, target)) in commands.iter().enumerate() {
+        let (tick, servo) = (k / rig.servos.len(), k % rig.servos.len());
+        assert_eq!(u16::from(ch), rig.servos[servo].output);
+        assert_eq!(target, s.pulses[tick][servo]);
+    }
+}
+
+#[test]
+fn ssc32_stream_parses_back_within_limits() {
+    let (bytes, rig) = demo();
+    let clip = Clip::parse(&bytes).unwrap();
+    let s = servo_stream(&clip, &rig, Protocol::Ssc32, 50.0).unwrap();
+    check_limits(&s, &rig);
+    let text = String::from_utf8(s.bytes()).unwrap();
+    let lines: Vec<&str> = text.split_terminator('\r').collect();
+    assert_eq!(lines.len(), s.ticks.len());
+    for (tick, line) in lines.iter().enumerate() {
+        let (moves, time) = line.split_once('T').unwrap();
+        assert_eq!(time, "20");
+        for (servo, m) in moves.split('#').skip(1).enumerate() {
+            let (ch, us) = m.split_once('P').unwrap();
+            assert_eq!(ch.parse::<u16>().unwrap(), rig.servos[servo].output);
+            let us: u32 = us.parse().unwrap();
+            // Rounded to the nearest µs.
+            let want = (u32::from(s.pulses[tick][servo]) + 2) / 4;
+            assert_eq!(us, want, "tick {tick} servo {servo}");
+        }
+    }
+}
+
+#[test]
+fn corrupt_clips_never_command_outside_limits() {
+    let (bytes, rig) = demo();
+    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+    let mut seed = 0x9E37_79B9_u64;
+    let mut next = |n: usize| {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % n as u64) as usize
+    };
+    let (mut played, mut refused) = (0, 0);
+    for _ in 0..300 {
+        let mut v = bytes.clone();
+        for _ in 0..1 + next(4) {
+            let at = 8 + next(v.len() - 12);
+            v[at] ^= 1 << next(8);
+        }
+        // Re-seal the CRC so the mutation reaches the decoder.
+        let body = v.len() - 4;
+        let sum = crc.checksum(&v[..body]);
+        v[body..].copy_from_slice(&sum.to_le_bytes());
+        let Ok(clip) = Clip::parse(&v) else {
+            refused += 1;
+            continue;
+        };
+        match servo_stream(&clip, &rig, Protocol::Maestro, 50.0) {
+            Ok(s) => {
+                check_limits(&s, &rig);
+                played += 1;
+            }
+            Err(_) => refused += 1,
+        }
+    }
+    eprintln!("corrupt demo clips: {played} played within limits, {refused} refused");
+    assert!(played > 0);
+}
+
+#[test]
+fn send_frames_reassemble_the_clip() {
+    let (bytes, _) = demo();
+    let frames = clip_frames(&bytes, true).unwrap();
+    let mut rx = FrameReceiver::<{ mocap_servo::stream::MAX_FRAME_LEN }>::new();
+    let mut clip = vec![0u8; bytes.len()];
+    let (mut chunks, mut hello, mut play) = (0, false, false);
+    let stream: Vec<u8> = frames.concat();
+    let mut rest: &[u8] = &stream;
+    while !rest.is_empty() {
+        let (msg, after) = rx.feed(rest);
+        rest = after;
+        match msg {
+            Some(Ok(Message::Hello { version })) => hello = version == 1,
+            Some(Ok(Message::ClipChunk {
+                offset,
+                total,
+                bytes: b,
+            })) => {
+                assert_eq!(total as usize, bytes.len());
+                clip[offset as usize..offset as usize + b.len()].copy_from_slice(b);
+                chunks += 1;
+            }
+            Some(Ok(Message::Play { loop_ })) => play = loop_,
+            Some(Ok(m)) => panic!("unexpected {m:?}"),
+            Some(Err(e)) => panic!("{e}"),
+            None => {}
+        }
+    }
+    assert!(hello && play);
+    assert_eq!(chunks, bytes.len().div_ceil(64));
+    assert_eq!(clip, bytes);
+}
