@@ -58,7 +58,19 @@ impl<'a> Reader<'a> {
 
     /// LEB128 varint of at most 5 bytes whose value fits in `u32`
     /// (postcard's `varint(u32)`); over-long or overflowing encodings fail.
+    #[inline]
     pub(crate) fn varint_u32(&mut self) -> Option<u32> {
+        // One-byte values (most lengths, counts and small numbers) first.
+        if let Some(&b) = self.bytes.get(self.pos) {
+            if b < 0x80 {
+                self.pos += 1;
+                return Some(u32::from(b));
+            }
+        }
+        self.varint_long()
+    }
+
+    fn varint_long(&mut self) -> Option<u32> {
         let mut value: u32 = 0;
         for i in 0..5u32 {
             let b = self.u8()?;
