@@ -17,6 +17,10 @@ for f in "$corpus"/cmu/35_17.bvh "$corpus"/cmu/09_01.bvh; do
     for k in 0 8; do
         target/release/mocap encode "$f" -o "$seeds/$(basename "$f" .bvh)_k$k.mcb" --key-interval "$k" >/dev/null 2>&1
     done
+    # pca-spline: segments, blends, patches.
+    target/release/mocap encode "$f" -o "$seeds/$(basename "$f" .bvh)_pca.mcb" --codec pca-spline \
+        --max-error 50mm >/dev/null 2>&1
 done
+target/release/mocap encode assets/animatronic_demo.bvh -o "$seeds/demo_pca.mcb" --codec pca-spline >/dev/null 2>&1
 cd decoder-nostd/fuzz
 cargo +nightly fuzz run parse_and_play -- -max_total_time="$secs" -max_len=65536
