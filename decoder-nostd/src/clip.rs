@@ -4,6 +4,7 @@ use crate::consts::{self, CRC_LEN, MAX_SECTIONS, PREAMBLE_LEN, SECTION_ENTRY_LEN
 use crate::error::Error;
 use crate::header::Header;
 use crate::reader::Reader;
+use crate::rig::Rig;
 
 /// CRC-32/ISO-HDLC (the zlib/PNG CRC), SPEC.md §2.3. With the `crc-table`
 /// feature a 1 KB table in flash makes it about six times faster; without
@@ -66,6 +67,7 @@ pub struct Clip<'a> {
     section_count: u16,
     header: Header<'a>,
     codec_id: u8,
+    rig: Option<Rig<'a>>,
     // Read only by codecs, all of which may be compiled out.
     #[cfg_attr(
         not(any(feature = "codec-index", feature = "codec-pca-spline")),
@@ -118,6 +120,7 @@ impl<'a> Clip<'a> {
         let mut seen = [false; 256];
         let mut header = None;
         let mut codec = None;
+        let mut rig = None;
         for _ in 0..count {
             let at = r.pos();
             let id = bytes.get(at).copied().unwrap_or(0);
@@ -148,6 +151,7 @@ impl<'a> Clip<'a> {
                     }
                     codec = Some((id, payload));
                 }
+                consts::SECTION_RIG => rig = Some(payload),
                 0x80..=0xFF => {} // ancillary: skipped by this decoder
                 _ => return Err(Error::ContainerUnknownSection { id }),
             }
@@ -157,11 +161,15 @@ impl<'a> Clip<'a> {
         })?;
         let header = Header::parse(header, header_id == consts::SECTION_HEADER_COMPACT)?;
         let (codec_id, codec) = codec.ok_or(Error::ContainerNoCodec)?;
+        let rig = rig
+            .map(|r| Rig::parse(r, header.channel_count()))
+            .transpose()?;
         let clip = Clip {
             bytes,
             section_count: count,
             header,
             codec_id,
+            rig,
             codec,
         };
         // Validate the codec section now so that playing never meets a
@@ -178,6 +186,12 @@ impl<'a> Clip<'a> {
     /// The whole clip's bytes.
     pub fn bytes(&self) -> &'a [u8] {
         self.bytes
+    }
+
+    /// The rig table of a servo clip (SPEC.md §3.5): channel `i` is servo
+    /// `i`'s angle; `None` for a motion clip.
+    pub fn rig(&self) -> Option<&Rig<'a>> {
+        self.rig.as_ref()
     }
 
     /// Id of the codec section (SPEC.md §2.2).

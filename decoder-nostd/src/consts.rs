@@ -19,6 +19,8 @@ pub const SECTION_HEADER: u8 = 0x01;
 /// Section id of the compact header (same content, smaller), §3.4. A clip
 /// has exactly one of `0x01` and `0x02`.
 pub const SECTION_HEADER_COMPACT: u8 = 0x02;
+/// Section id of the rig table of a servo clip, §3.5.
+pub const SECTION_RIG: u8 = 0x03;
 /// Section id of the `index` codec payload, §4.
 pub const SECTION_CODEC_INDEX: u8 = 0x10;
 /// Section id of the `pca-spline` codec payload, §5.

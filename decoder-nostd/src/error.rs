@@ -102,6 +102,11 @@ pub enum Error {
     },
     /// Bytes remain after the header's last field (§3.1).
     HeaderTrailingBytes,
+    /// The rig section is malformed (§3.5).
+    RigMalformed {
+        /// Which rule of §3.5 is broken.
+        rule: &'static str,
+    },
     /// The index codec section is malformed (§4).
     IndexMalformed {
         /// Which rule of §4 is broken.
@@ -189,6 +194,7 @@ impl fmt::Display for Error {
             ),
             Error::HeaderRange { channel } => write!(f, "channel {channel} has min > max"),
             Error::HeaderTrailingBytes => f.write_str("bytes after the end of the header"),
+            Error::RigMalformed { rule } => write!(f, "rig table: {rule}"),
             Error::IndexMalformed { rule } => write!(f, "index codec: {rule}"),
             Error::IndexDescriptor { channel } => {
                 write!(f, "index codec: invalid descriptor for channel {channel}")

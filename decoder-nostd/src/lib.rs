@@ -36,11 +36,13 @@ mod error;
 mod header;
 mod player;
 mod reader;
+mod rig;
 
 pub use clip::{Clip, Section, Sections};
 pub use error::Error;
 pub use header::{Channel, ChannelIter, ChannelKind, Header, Joint, JointIter, Unit};
 pub use player::Player;
+pub use rig::{Rig, RigServo};
 
 /// The fixed-point key-frame spline of the `pca-spline` codec (SPEC.md
 /// §5.4), public so the encoder fits exactly what the decoder evaluates.

@@ -15,5 +15,6 @@ pub mod motion;
 pub mod play;
 pub mod plot;
 pub mod rig;
+pub mod servo_clip;
 pub mod track;
 pub mod units;

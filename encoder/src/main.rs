@@ -64,6 +64,11 @@ enum Command {
         /// Also write the clip as a source file beside the output.
         #[arg(long, value_enum)]
         emit: Option<Emit>,
+        /// Encode the servos of this rig in servo space (a servo clip with
+        /// the rig table, SPEC.md §3.5); the bound is then in degrees of
+        /// servo travel.
+        #[arg(long)]
+        rig: Option<PathBuf>,
     },
     /// Decode a .mcb clip into BVH (or the firmware's text format).
     Decode {
@@ -122,9 +127,10 @@ enum Command {
     Play {
         /// Input .mcb clip.
         clip: PathBuf,
-        /// Rig file (TOML, see assets/rigs/README.md).
+        /// Rig file (TOML, see assets/rigs/README.md); not needed for a
+        /// servo clip (`encode --rig`), which carries its rig table.
         #[arg(long)]
-        rig: PathBuf,
+        rig: Option<PathBuf>,
         /// Servo controller protocol.
         #[arg(long, value_enum)]
         protocol: mocap_encoder::play::Protocol,
@@ -247,6 +253,66 @@ fn emit_source(kind: Emit, output: &Path, bytes: &[u8]) -> Result<PathBuf, Strin
     Ok(path)
 }
 
+/// `mocap encode --rig`: the rig's servo signals as a servo clip.
+fn encode_servo_clip(
+    m: &mocap_encoder::motion::Motion,
+    rig_path: &Path,
+    metres_per_unit: f64,
+    codec: CodecChoice,
+    bound: Bound,
+    key_interval: Option<u16>,
+    output: &Path,
+) -> Result<(), String> {
+    use mocap_encoder::{rig::Rig, servo_clip};
+    if bound.positional() {
+        return Err(
+            "a servo clip's bound is in degrees of servo travel (e.g. --max-error 0.5deg)".into(),
+        );
+    }
+    let rig = Rig::read_file(rig_path).map_err(|e| e.to_string())?;
+    let channels = rig.resolve(&m.skeleton).map_err(|e| e.to_string())?;
+    let tracks = rig.servo_tracks(m, &channels, metres_per_unit);
+    eprint!("{tracks}");
+    let sm = servo_clip::servo_motion(&rig, &tracks);
+    let opts = EncodeOptions {
+        codec,
+        bound,
+        metres_per_unit: 1e-3,
+        key_interval,
+    };
+    let enc = encode::encode(&sm, &opts)?;
+    let bytes = servo_clip::attach_rig(&enc.bytes, &rig)?;
+    write(output, &bytes)?;
+    let clip = Clip::parse(&bytes).map_err(|e| e.to_string())?;
+    let pulses = servo_clip::decoded_pulses(&clip)?;
+    let errors: Vec<_> = tracks
+        .servos
+        .iter()
+        .zip(&pulses)
+        .map(|(t, p)| mocap_encoder::rig::servo_error(&t.pulses, p))
+        .collect();
+    let max_us = errors.iter().map(|e| e.max_us).fold(0.0, f64::max);
+    let rms_us = (errors.iter().map(|e| e.rms_us * e.rms_us).sum::<f64>()
+        / errors.len().max(1) as f64)
+        .sqrt();
+    let seconds = m.frames() as f64 * m.frame_time;
+    let raw16 = rig.servos.len() * 2 * m.frames();
+    println!(
+        "{}: servo clip, {} servos, {} bytes = {:.0} B/s of show ({:.1}x less than raw 16-bit frames at {:.0} Hz), servo angle max {:.3}°, pulse error max {:.2} µs, RMS {:.2} µs ({})",
+        output.display(),
+        rig.servos.len(),
+        bytes.len(),
+        bytes.len() as f64 / seconds,
+        raw16 as f64 / bytes.len() as f64,
+        1.0 / m.frame_time,
+        enc.metrics.angle_max_deg,
+        max_us,
+        rms_us,
+        bench::codec_name(enc.codec)
+    );
+    Ok(())
+}
+
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Encode {
@@ -258,10 +324,22 @@ fn run(cli: Cli) -> Result<(), String> {
             units: unit_arg,
             key_interval,
             emit,
+            rig,
         } => {
             let m = bvh::read_file(&input).map_err(|e| e.to_string())?;
             let unit = resolve_units(&unit_arg, &m);
             let bound = Bound::from_specs(&max_error.concat());
+            if let Some(rig_path) = rig {
+                return encode_servo_clip(
+                    &m,
+                    &rig_path,
+                    unit.metres(),
+                    codec,
+                    bound,
+                    key_interval,
+                    &output,
+                );
+            }
             eprintln!(
                 "{}: {} frames × {} channels at {:.1} Hz, units {unit}; encoding ({codec:?}, bound {bound})…",
                 input.display(),
@@ -418,10 +496,19 @@ fn run(cli: Cli) -> Result<(), String> {
         } => {
             let bytes = read_clip(&clip)?;
             let c = Clip::parse(&bytes).map_err(|e| format!("{}: {e}", clip.display()))?;
-            let rig = mocap_encoder::rig::Rig::read_file(&rig).map_err(|e| e.to_string())?;
-            let rate = rate.unwrap_or(rig.rate_hz);
-            let s = mocap_encoder::play::servo_stream(&c, &rig, protocol, rate)?;
-            eprint!("{}", s.tracks);
+            let s = match rig {
+                Some(rig) => {
+                    let rig =
+                        mocap_encoder::rig::Rig::read_file(&rig).map_err(|e| e.to_string())?;
+                    let rate = rate.unwrap_or(rig.rate_hz);
+                    mocap_encoder::play::servo_stream(&c, &rig, protocol, rate)?
+                }
+                None => mocap_encoder::play::servo_clip_stream(&c, protocol, rate)?,
+            };
+            if let Some(t) = &s.tracks {
+                eprint!("{t}");
+            }
+            let rate = s.rate_hz;
             let dest = port.or(output).ok_or("give --port or --output")?;
             let mut file =
                 std::fs::File::create(&dest).map_err(|e| format!("{}: {e}", dest.display()))?;
@@ -502,6 +589,13 @@ fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
         h.joint_count(),
         h.source_unit_nm()
     );
+    if let Some(rig) = clip.rig() {
+        s += &format!(
+            "servo clip: {} servos at {:.3} Hz (channel i = servo i, millidegrees of travel)\n",
+            rig.servo_count(),
+            f64::from(rig.rate_mhz()) / 1000.0
+        );
+    }
     for sec in clip.sections() {
         s += &format!("section {:#04x}: {} bytes\n", sec.id, sec.bytes.len());
         if sec.id == mocap_decoder::consts::SECTION_CODEC_INDEX {

@@ -39,8 +39,9 @@ pub struct ServoStream {
     pub pulses: Vec<Vec<u16>>,
     /// Ticks of the clip itself; the rest return the servos to neutral.
     pub clip_ticks: usize,
-    /// The rig's own signals at the tick rate, with their clamp reports.
-    pub tracks: ServoTracks,
+    /// The rig's own signals at the tick rate, with their clamp reports
+    /// (motion clips; `None` for servo clips, already in servo space).
+    pub tracks: Option<ServoTracks>,
     /// The limits every pulse was held to, rig order.
     pub limits: Vec<ServoLimits>,
 }
@@ -50,6 +51,68 @@ impl ServoStream {
     pub fn bytes(&self) -> Vec<u8> {
         self.ticks.concat()
     }
+}
+
+/// Plays a servo clip (one with a rig table, SPEC.md §3.5) at its rig's
+/// rate or `rate_hz`: each channel's decoded angle becomes its servo's
+/// pulse through `RigServo::pulse_qus` — the firmware's own integer
+/// mapping — then the same [`Limiter`] and return to neutral as
+/// [`servo_stream`].
+pub fn servo_clip_stream(
+    clip: &Clip<'_>,
+    protocol: Protocol,
+    rate_hz: Option<f64>,
+) -> Result<ServoStream, String> {
+    let rig = clip.rig().ok_or("not a servo clip: give --rig")?;
+    let servos: Vec<_> = rig.servos().collect();
+    if servos.len() > MAX_SERVOS {
+        return Err(format!("{} servos, at most {MAX_SERVOS}", servos.len()));
+    }
+    let rate_hz = rate_hz.unwrap_or(f64::from(rig.rate_mhz()) / 1000.0);
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(format!("servo rate {rate_hz} Hz must be positive"));
+    }
+    let limits: Vec<ServoLimits> = servos
+        .iter()
+        .map(|s| {
+            let (lo, hi) = s.pulse_range_qus();
+            // mdeg/s → ¼ µs per tick.
+            let span_mdeg = f64::from(s.angle_hi_mdeg) - f64::from(s.angle_lo_mdeg);
+            let qus_per_mdeg = f64::from(hi - lo) / span_mdeg.max(1.0);
+            let step = if s.max_speed_mdeg_s == 0 {
+                0.0
+            } else {
+                (f64::from(s.max_speed_mdeg_s) / rate_hz * qus_per_mdeg)
+                    .ceil()
+                    .max(1.0)
+            };
+            ServoLimits::new(lo, hi, s.neutral_qus, step.min(f64::from(u16::MAX)) as u16)
+                .map_err(|e| format!("servo output {}: {e}", s.output))
+        })
+        .collect::<Result<_, _>>()?;
+    let h = clip.header();
+    let period_us = 1e6 / rate_hz;
+    let count = (h.duration_us() as f64 / period_us).floor() as usize + 1;
+    let mut player = Box::new(Player::<MAX_SERVOS>::new(clip).map_err(|e| e.to_string())?);
+    let mut out = [0i32; MAX_SERVOS];
+    let targets = (0..count).map(move |i| {
+        let t_us = (i as f64 * period_us).round() as u64;
+        player
+            .sample_at(t_us, &mut out)
+            .map_err(|e| e.to_string())
+            .map(|()| {
+                servos
+                    .iter()
+                    .zip(&out)
+                    .map(|(s, &v)| s.pulse_qus(v))
+                    .collect::<Vec<u16>>()
+            })
+    });
+    let outputs: Vec<u16> = clip
+        .rig()
+        .map(|r| r.servos().map(|s| s.output).collect())
+        .unwrap_or_default();
+    drive(targets, &limits, &outputs, protocol, rate_hz, count, None)
 }
 
 /// Samples `clip` at `rate_hz` with `sample_at`, maps it through `rig`
@@ -117,30 +180,55 @@ pub fn servo_stream(
             .map_err(|e| format!("{}: servo {}: {e}", rig.file, s.name))
         })
         .collect::<Result<_, _>>()?;
+    let outputs: Vec<u16> = rig.servos.iter().map(|s| s.output).collect();
+    let targets: Vec<Result<Vec<u16>, String>> = (0..count)
+        .map(|i| Ok(tracks.servos.iter().map(|t| t.pulses[i]).collect()))
+        .collect();
+    drive(
+        targets,
+        &limits,
+        &outputs,
+        protocol,
+        rate_hz,
+        count,
+        Some(tracks),
+    )
+}
+
+/// Holds every tick's targets to `limits` with [`Limiter`] — whatever they
+/// are, no pulse leaves its range or moves faster than its speed limit —
+/// encodes them, and returns every servo to neutral at its speed limit.
+/// The limiter starts at neutral (the servos' real position at power-on is
+/// unknown): the first ticks move towards the clip's first pose at the
+/// speed limit.
+fn drive(
+    targets: impl IntoIterator<Item = Result<Vec<u16>, String>>,
+    limits: &[ServoLimits],
+    outputs: &[u16],
+    protocol: Protocol,
+    rate_hz: f64,
+    count: usize,
+    tracks: Option<ServoTracks>,
+) -> Result<ServoStream, String> {
+    let n_servos = limits.len();
     let idle = ServoLimits::new(6000, 6000, 6000, 0).map_err(|e| e.to_string())?;
     let mut all = [idle; MAX_SERVOS];
-    all[..n_servos].copy_from_slice(&limits);
+    all[..n_servos].copy_from_slice(limits);
     let mut limiter = Limiter::new(all).map_err(|e| e.to_string())?;
-    // The limiter starts at neutral (the servos' real position at power-on
-    // is unknown): the first ticks move towards the clip's first pose at
-    // the speed limit.
-    let outputs: Vec<u16> = rig.servos.iter().map(|s| s.output).collect();
     let time_ms = (1000.0 / rate_hz).round().clamp(1.0, f64::from(u16::MAX)) as u16;
-    let encode = |pulses: &[u16]| command(protocol, &outputs, pulses, time_ms);
+    let encode = |pulses: &[u16]| command(protocol, outputs, pulses, time_ms);
     let mut ticks = Vec::with_capacity(count + 16);
     let mut sent = Vec::with_capacity(count + 16);
-    let mut targets = [6000u16; MAX_SERVOS];
+    let mut want = [6000u16; MAX_SERVOS];
     let mut held = [6000u16; MAX_SERVOS];
-    for i in 0..count {
-        for (slot, t) in targets.iter_mut().zip(&tracks.servos) {
-            *slot = t.pulses[i];
-        }
-        limiter
-            .apply(&targets, &mut held)
-            .map_err(|e| e.to_string())?;
+    for t in targets {
+        let t = t?;
+        want[..n_servos].copy_from_slice(&t[..n_servos]);
+        limiter.apply(&want, &mut held).map_err(|e| e.to_string())?;
         ticks.push(encode(&held[..n_servos])?);
         sent.push(held[..n_servos].to_vec());
     }
+    let clip_ticks = ticks.len();
     for _ in 0..MAX_STOP_TICKS {
         let done = limiter.stop_step(&mut held).map_err(|e| e.to_string())?;
         ticks.push(encode(&held[..n_servos])?);
@@ -153,9 +241,9 @@ pub fn servo_stream(
         rate_hz,
         ticks,
         pulses: sent,
-        clip_ticks: count,
+        clip_ticks,
         tracks,
-        limits,
+        limits: limits.to_vec(),
     })
 }
 

@@ -6,8 +6,10 @@
 use std::path::Path;
 
 use mocap_decoder::Clip;
-use mocap_encoder::play::{clip_frames, servo_stream, Protocol, ServoStream};
+use mocap_encoder::encode::{self, Bound, CodecChoice, EncodeOptions};
+use mocap_encoder::play::{clip_frames, servo_clip_stream, servo_stream, Protocol, ServoStream};
 use mocap_encoder::rig::Rig;
+use mocap_encoder::{bvh, servo_clip};
 use mocap_servo::{FrameReceiver, Message};
 
 fn root() -> &'static Path {
@@ -94,6 +96,120 @@ fn ssc32_stream_parses_back_within_limits() {
             assert_eq!(us, want, "tick {tick} servo {servo}");
         }
     }
+}
+
+/// The demo's servo clip (`mocap encode --rig`) at `bound_deg`.
+fn servo_clip_bytes(codec: CodecChoice, bound_deg: f64) -> (Vec<u8>, Rig, Vec<Vec<u16>>) {
+    let (_, rig) = demo();
+    let m = bvh::read_file(&root().join("assets/animatronic_demo.bvh")).unwrap();
+    let channels = rig.resolve(&m.skeleton).unwrap();
+    let tracks = rig.servo_tracks(&m, &channels, 0.01);
+    let sm = servo_clip::servo_motion(&rig, &tracks);
+    let opts = EncodeOptions {
+        codec,
+        bound: Bound {
+            angle_deg: Some(bound_deg),
+            position_mm: None,
+            arms_mm: None,
+        },
+        metres_per_unit: 1e-3,
+        key_interval: None,
+    };
+    let enc = encode::encode(&sm, &opts).unwrap();
+    let bytes = servo_clip::attach_rig(&enc.bytes, &rig).unwrap();
+    let pulses = tracks.servos.iter().map(|t| t.pulses.clone()).collect();
+    (bytes, rig, pulses)
+}
+
+#[test]
+fn servo_clips_decode_within_the_bound_and_play_within_limits() {
+    for codec in [CodecChoice::Index, CodecChoice::PcaSpline] {
+        let (bytes, rig, want) = servo_clip_bytes(codec, 0.5);
+        let clip = Clip::parse(&bytes).unwrap();
+        let table = clip.rig().expect("rig table");
+        assert_eq!(table.servo_count(), rig.servos.len());
+        assert_eq!(table.rate_mhz(), 50_000);
+        let got = servo_clip::decoded_pulses(&clip).unwrap();
+        for ((s, w), g) in rig.servos.iter().zip(&want).zip(&got) {
+            let e = mocap_encoder::rig::servo_error(w, g);
+            // 0.5° of travel plus the ¼ µs rounding of each side.
+            let limit = 0.5 / s.degrees_per_us() + 0.5;
+            assert!(
+                e.max_us <= limit,
+                "{codec:?} {}: {} µs > {limit}",
+                s.name,
+                e.max_us
+            );
+        }
+        let s = servo_clip_stream(&clip, Protocol::Maestro, None).unwrap();
+        assert!(s.tracks.is_none());
+        check_limits(&s, &rig);
+        // The clip's own limits are the rig's.
+        for (l, servo) in s.limits.iter().zip(&rig.servos) {
+            assert_eq!((l.min_qus, l.max_qus), servo.quarter_us_range());
+            assert_eq!(l.neutral_qus, servo.neutral_quarter_us());
+        }
+    }
+}
+
+#[test]
+fn corrupt_servo_clips_never_command_outside_limits() {
+    let (bytes, rig, _) = servo_clip_bytes(CodecChoice::PcaSpline, 1.0);
+    let (played, refused) = mutate_and_play(&bytes, |clip| {
+        let s = servo_clip_stream(clip, Protocol::Maestro, Some(50.0))?;
+        // The table itself may have been mutated: hold to what the clip says
+        // and to the physical 400–2600 µs window.
+        for p in s.pulses.iter().flatten() {
+            assert!((1600..=10_400).contains(p), "{p}");
+        }
+        check_limits(&s, &rig_like(&s));
+        Ok(())
+    });
+    eprintln!("corrupt servo clips: {played} played within limits, {refused} refused");
+    assert!(played > 0);
+    let _ = rig;
+}
+
+/// A rig view of a stream's own limits, for `check_limits`' messages.
+fn rig_like(s: &ServoStream) -> Rig {
+    let mut text = String::from("[rig]\nname = \"clip\"\n");
+    for (i, _) in s.limits.iter().enumerate() {
+        text += &format!(
+            "[[servo]]\nname = \"s{i}\"\noutput = {i}\nchannel = \"J.Zrotation\"\nangle = [-1.0, 1.0]\npulse = [1000, 2000]\n"
+        );
+    }
+    Rig::parse(&text, "clip").unwrap()
+}
+
+/// Flips bits (re-sealing the CRC) and plays what still parses.
+fn mutate_and_play(bytes: &[u8], play: impl Fn(&Clip<'_>) -> Result<(), String>) -> (usize, usize) {
+    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+    let mut seed = 0x1234_5678_9ABC_u64;
+    let mut next = |n: usize| {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % n as u64) as usize
+    };
+    let (mut played, mut refused) = (0, 0);
+    for _ in 0..300 {
+        let mut v = bytes.to_vec();
+        for _ in 0..1 + next(4) {
+            let at = 8 + next(v.len() - 12);
+            v[at] ^= 1 << next(8);
+        }
+        let body = v.len() - 4;
+        let sum = crc.checksum(&v[..body]);
+        v[body..].copy_from_slice(&sum.to_le_bytes());
+        match Clip::parse(&v) {
+            Ok(clip) => match play(&clip) {
+                Ok(()) => played += 1,
+                Err(_) => refused += 1,
+            },
+            Err(_) => refused += 1,
+        }
+    }
+    (played, refused)
 }
 
 #[test]

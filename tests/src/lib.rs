@@ -62,6 +62,11 @@ pub fn exercise_decoder(bytes: &[u8]) -> Result<u64, mocap_decoder::Error> {
     let mut sum = 0u64;
     // Walk headers too: names, channels.
     sum += clip.header().joints().count() as u64 + clip.header().channels().count() as u64;
+    if let Some(rig) = clip.rig() {
+        for s in rig.servos() {
+            sum = sum.wrapping_add(u64::from(s.pulse_qus(i32::MIN)) + u64::from(s.pulse_qus(0)));
+        }
+    }
     while player.next_frame(&mut out)?.is_some() {
         sum = sum.wrapping_add(out[0] as u64);
     }
