@@ -38,6 +38,20 @@ for n in 150 300 600 1200; do
 done
 echo
 
+echo "## Servo clips (mocap encode --rig assets/rigs/cmu_upper_body.toml, 16 servos)"
+echo
+echo '```text'
+for f in 35_01 05_04; do
+    for b in 0.5deg 2deg; do
+        for c in index pca-spline; do
+            "$mocap" encode "$corpus/cmu/$f.bvh" --rig assets/rigs/cmu_upper_body.toml -o "$out/servo.mcb" \
+                --codec "$c" --max-error "$b" 2>/dev/null | sed "s|^$out/servo.mcb: |$f @ $b: |"
+        done
+    done
+done
+echo '```'
+echo
+
 clip_src="${1:-$corpus/cmu/35_01.bvh}"
 "$mocap" encode "$clip_src" -o "$out/clip.mcb" --max-error 1deg >/dev/null 2>&1
 channels=$("$mocap" info "$out/clip.mcb" | sed -n 's/.* × \([0-9]*\) channels.*/\1/p')
