@@ -121,9 +121,22 @@ fn main() {
         Err(env::VarError::NotPresent) => 0,
         Err(e) => fail(&format!("mocap-firmware: MOCAP_SAMPLE_US: {e}")),
     };
+    // Servo mode: `MOCAP_SERVO=maestro` plays a servo clip (one with a rig table) at its
+    // rig's rate and prints the Pololu Maestro commands of every tick as hex.
+    println!("cargo:rerun-if-env-changed=MOCAP_SERVO");
+    let servo: u8 = match env::var("MOCAP_SERVO").as_deref().map(str::trim) {
+        Ok("") | Err(env::VarError::NotPresent) => 0,
+        Ok("maestro") => 1,
+        Ok(v) => fail(&format!(
+            "mocap-firmware: MOCAP_SERVO must be `maestro` (or unset), got '{v}'"
+        )),
+        Err(e) => fail(&format!("mocap-firmware: MOCAP_SERVO: {e}")),
+    };
     let config = format!(
         "/// Sampling period in µs (`MOCAP_SAMPLE_US`); 0 plays every frame.\n\
-         pub const SAMPLE_US: u64 = {sample_us};\n"
+         pub const SAMPLE_US: u64 = {sample_us};\n\
+         /// Servo mode (`MOCAP_SERVO`): 0 off, 1 Pololu Maestro.\n\
+         pub const SERVO: u8 = {servo};\n"
     );
     let config_path = out_dir.join("config.rs");
     if fs::read_to_string(&config_path).ok().as_deref() != Some(config.as_str()) {

@@ -7,7 +7,9 @@
 #       other's ELF). --sample-us P (µs, > 0) builds the sample mode (MOCAP_SAMPLE_US): the
 #       firmware prints Player::sample_at at t = 0, P, 2P, … up to and including the first t
 #       past the clip's duration instead of every frame.
-#   scripts/firmware.sh run --board B [--clip PATH.mcb] [--sample-us P] [--icount] [--timeout SECONDS]
+#   scripts/firmware.sh run --board B [--clip PATH.mcb] [--sample-us P] [--servo maestro] [--icount] [--timeout SECONDS]
+#       --servo maestro plays a servo clip (mocap encode --rig) at its rig's rate and prints the
+#       Pololu Maestro bytes of every tick as hex lines (MOCAP_SERVO; see firmware-example/README.md).
 #       Builds, then runs the ELF in QEMU headless: the UART on stdout, semihosting on. The exit
 #       code is the firmware's (0 = every frame decoded), 124 on timeout (default 300 s).
 #       --icount adds `-icount shift=0` so the instruction figures in the output are exact.
@@ -76,6 +78,7 @@ CLIP="$FW/clips/demo.mcb"
 ICOUNT=0
 TIMEOUT=300
 SAMPLE_US=""
+SERVO=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
@@ -84,6 +87,8 @@ while [ "$#" -gt 0 ]; do
         --clip=*) CLIP="${1#*=}"; shift ;;
         --sample-us) [ "$#" -ge 2 ] || die "--sample-us needs a value"; SAMPLE_US="$2"; shift 2 ;;
         --sample-us=*) SAMPLE_US="${1#*=}"; shift ;;
+        --servo) [ "$#" -ge 2 ] || die "--servo needs a protocol"; SERVO="$2"; shift 2 ;;
+        --servo=*) SERVO="${1#*=}"; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -134,14 +139,14 @@ build() {
 
     target_dir="$FW/target/$BOARD"
     elf_dir="$target_dir/elf"
-    elf="$elf_dir/mocap-firmware-$sha${SAMPLE_US:+-s$SAMPLE_US}.elf"
+    elf="$elf_dir/mocap-firmware-$sha${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/$BOARD.lock"
     # One build per board at a time; the ELF is copied out under the lock.
     (
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
-        MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" CARGO_TARGET_DIR="$target_dir" \
+        MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" CARGO_TARGET_DIR="$target_dir" \
             mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"

@@ -58,6 +58,21 @@ impl RigServo {
         (p0 + q).clamp(0, i64::from(u16::MAX)) as u16
     }
 
+    /// The most the pulse may change per tick at `rate_mhz` for the speed
+    /// limit, ¼ µs, rounded up (at least 1); 0 = no limit.
+    pub fn max_step_qus(&self, rate_mhz: u32) -> u16 {
+        if self.max_speed_mdeg_s == 0 {
+            return 0;
+        }
+        let span_mdeg =
+            (i64::from(self.angle_hi_mdeg) - i64::from(self.angle_lo_mdeg)).max(1) as u64;
+        let pulses = u64::from(self.pulse_lo_qus.abs_diff(self.pulse_hi_qus));
+        // speed [mdeg/s] · pulses/span [qus/mdeg] / (rate_mhz / 1000) [1/s]
+        let num = u64::from(self.max_speed_mdeg_s) * pulses * 1000;
+        let den = span_mdeg * u64::from(rate_mhz.max(1));
+        num.div_ceil(den).clamp(1, u64::from(u16::MAX)) as u16
+    }
+
     /// The smallest and largest pulse of the servo.
     pub fn pulse_range_qus(&self) -> (u16, u16) {
         (
@@ -125,6 +140,17 @@ impl<'a> Rig<'a> {
             read_servo(&mut r)
         })
     }
+}
+
+/// Servo ticks over `duration_us` at `rate_mhz`: one at t = 0, then one
+/// per period up to the duration (SPEC.md §3.5).
+pub fn tick_count(duration_us: u64, rate_mhz: u32) -> u64 {
+    duration_us.saturating_mul(u64::from(rate_mhz)) / 1_000_000_000 + 1
+}
+
+/// Time of tick `i` at `rate_mhz`, µs: `i · 10^9 / rate_mhz` rounded down.
+pub fn tick_us(i: u64, rate_mhz: u32) -> u64 {
+    i.saturating_mul(1_000_000_000) / u64::from(rate_mhz.max(1))
 }
 
 fn read_servo(r: &mut Reader<'_>) -> Option<RigServo> {

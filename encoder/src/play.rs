@@ -68,35 +68,30 @@ pub fn servo_clip_stream(
     if servos.len() > MAX_SERVOS {
         return Err(format!("{} servos, at most {MAX_SERVOS}", servos.len()));
     }
-    let rate_hz = rate_hz.unwrap_or(f64::from(rig.rate_mhz()) / 1000.0);
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(format!("servo rate {rate_hz} Hz must be positive"));
-    }
+    // Integer timing and limits, exactly as the firmware computes them
+    // (`tick_count`, `tick_us`, `RigServo::max_step_qus`).
+    let rate_mhz = match rate_hz {
+        Some(r) if r.is_finite() && r > 0.0 => {
+            (r * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
+        }
+        Some(r) => return Err(format!("servo rate {r} Hz must be positive")),
+        None => rig.rate_mhz(),
+    };
+    let rate_hz = f64::from(rate_mhz) / 1000.0;
     let limits: Vec<ServoLimits> = servos
         .iter()
         .map(|s| {
             let (lo, hi) = s.pulse_range_qus();
-            // mdeg/s → ¼ µs per tick.
-            let span_mdeg = f64::from(s.angle_hi_mdeg) - f64::from(s.angle_lo_mdeg);
-            let qus_per_mdeg = f64::from(hi - lo) / span_mdeg.max(1.0);
-            let step = if s.max_speed_mdeg_s == 0 {
-                0.0
-            } else {
-                (f64::from(s.max_speed_mdeg_s) / rate_hz * qus_per_mdeg)
-                    .ceil()
-                    .max(1.0)
-            };
-            ServoLimits::new(lo, hi, s.neutral_qus, step.min(f64::from(u16::MAX)) as u16)
+            ServoLimits::new(lo, hi, s.neutral_qus, s.max_step_qus(rate_mhz))
                 .map_err(|e| format!("servo output {}: {e}", s.output))
         })
         .collect::<Result<_, _>>()?;
-    let h = clip.header();
-    let period_us = 1e6 / rate_hz;
-    let count = (h.duration_us() as f64 / period_us).floor() as usize + 1;
+    let duration_us = clip.header().duration_us();
+    let count = mocap_decoder::tick_count(duration_us, rate_mhz) as usize;
     let mut player = Box::new(Player::<MAX_SERVOS>::new(clip).map_err(|e| e.to_string())?);
     let mut out = [0i32; MAX_SERVOS];
     let targets = (0..count).map(move |i| {
-        let t_us = (i as f64 * period_us).round() as u64;
+        let t_us = mocap_decoder::tick_us(i as u64, rate_mhz);
         player
             .sample_at(t_us, &mut out)
             .map_err(|e| e.to_string())

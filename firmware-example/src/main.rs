@@ -9,6 +9,7 @@
 #![no_main]
 
 mod board;
+mod servo;
 mod text;
 
 use core::mem::size_of;
@@ -31,7 +32,7 @@ static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
 mod config {
     include!(concat!(env!("OUT_DIR"), "/config.rs"));
 }
-use config::SAMPLE_US;
+use config::{SAMPLE_US, SERVO};
 
 /// Whether this build samples with `sample_at` (else it plays every frame with `next_frame`).
 const SAMPLING: bool = SAMPLE_US != 0;
@@ -189,6 +190,7 @@ mod stack {
 /// Why the run failed.
 enum Failure {
     Decoder(&'static str, Error),
+    Servo(&'static str),
     FrameIndex { expected: u32, got: u32 },
     FrameCount { header: u32, decoded: u32 },
     SampleCount { expected: u32, got: u32 },
@@ -318,6 +320,9 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     let clip = decoder_glue::parse(CLIP).map_err(|e| Failure::Decoder("parse", e))?;
     let parse_ticks = ticks::since(t0, ticks::now());
 
+    if SERVO != 0 {
+        return servo::run(&clip, calibration_ticks, text);
+    }
     let header_frames = clip.header().frame_count();
     let channels = clip.header().channel_count();
     text.str("# mocap-firmware clip")
@@ -421,6 +426,9 @@ fn report(text: &mut Out, failure: &Failure) {
             // core::fmt only on this path; the error's Display says which SPEC.md rule broke.
             let _ = core::fmt::write(&mut FmtAdapter(text), format_args!("{error}"));
             text.nl();
+        }
+        Failure::Servo(what) => {
+            text.str("# error servo: ").str(what).nl();
         }
         Failure::FrameIndex { expected, got } => {
             text.str("# error frame_index")

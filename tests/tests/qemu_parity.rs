@@ -57,12 +57,19 @@ fn encode_to(
 }
 
 fn run_board(board: &str, clip: &Path, sample_us: Option<u64>) -> String {
+    run_board_with(board, clip, sample_us, None)
+}
+
+fn run_board_with(board: &str, clip: &Path, sample_us: Option<u64>, servo: Option<&str>) -> String {
     let mut cmd = Command::new("bash");
     cmd.arg(workspace_root().join("scripts/firmware.sh"))
         .args(["run", "--board", board, "--clip"])
         .arg(clip);
     if let Some(p) = sample_us {
         cmd.args(["--sample-us", &p.to_string()]);
+    }
+    if let Some(p) = servo {
+        cmd.args(["--servo", p]);
     }
     let out = cmd.output().expect("scripts/firmware.sh runs");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
@@ -179,5 +186,69 @@ fn pca_spline_firmware_output_matches_host_on_three_cores() {
             .find(|p| p.ends_with("35_01.bvh"))
             .unwrap_or(&files[0]);
         check_pca_spline("pca-cmu-35_01", &bvh::read_file(f).unwrap(), "50mm");
+    }
+}
+
+/// Servo mode: the demo's servo clip (`mocap encode --rig`) played by the
+/// firmware at 50 Hz through the rig mapping and the limiter must send the
+/// same Pololu Maestro bytes as `mocap play --protocol maestro`.
+#[test]
+fn servo_clip_maestro_bytes_match_host_on_three_cores() {
+    use mocap_encoder::play::{servo_clip_stream, Protocol};
+    use mocap_encoder::rig::Rig;
+    use mocap_encoder::servo_clip;
+    if !qemu_available() {
+        return;
+    }
+    let root = workspace_root();
+    let rig = Rig::read_file(&root.join("assets/rigs/animatronic_demo.toml")).unwrap();
+    let m = generate::animatronic_demo();
+    let channels = rig.resolve(&m.skeleton).unwrap();
+    let tracks = rig.servo_tracks(&m, &channels, units::detect(&m).metres());
+    let sm = servo_clip::servo_motion(&rig, &tracks);
+    let opts = EncodeOptions {
+        codec: CodecChoice::PcaSpline,
+        bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
+        metres_per_unit: 1e-3,
+        key_interval: None,
+    };
+    let enc = encode::encode(&sm, &opts).unwrap();
+    let bytes = servo_clip::attach_rig(&enc.bytes, &rig).unwrap();
+    let dir = root.join("target/qemu-parity");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("servo-demo.mcb");
+    std::fs::write(&path, &bytes).unwrap();
+    let clip = Clip::parse(&bytes).unwrap();
+    let stream = servo_clip_stream(&clip, Protocol::Maestro, None).unwrap();
+    let expected: String = stream
+        .ticks
+        .iter()
+        .map(|t| {
+            let mut line = String::from("m");
+            for b in t {
+                line += &format!(" {b:02x}");
+            }
+            line + "\n"
+        })
+        .collect();
+    for board in BOARDS {
+        let uart = run_board_with(board, &path, None, Some("maestro"));
+        let data: String = uart
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .flat_map(|l| [l, "\n"])
+            .collect();
+        assert!(
+            data == expected,
+            "servo clip on {board}: Maestro bytes differ from mocap play ({} vs {} ticks)",
+            data.lines().count(),
+            expected.lines().count()
+        );
+        let stats: Vec<&str> = uart.lines().filter(|l| l.starts_with("# ")).collect();
+        eprintln!(
+            "servo clip on {board}: {} ticks of Maestro bytes identical; {}",
+            stream.ticks.len(),
+            stats.join("; ")
+        );
     }
 }
