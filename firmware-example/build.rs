@@ -121,21 +121,22 @@ fn main() {
         Err(env::VarError::NotPresent) => 0,
         Err(e) => fail(&format!("mocap-firmware: MOCAP_SAMPLE_US: {e}")),
     };
-    // Servo mode: `MOCAP_SERVO=maestro` plays a servo clip (one with a rig table) at its
-    // rig's rate and prints the Pololu Maestro commands of every tick as hex.
+    // Servo mode: `MOCAP_SERVO=maestro|ssc32` plays a servo clip (one with a rig table) at
+    // its rig's rate and prints every tick's commands (Maestro as hex, SSC-32 as its text).
     println!("cargo:rerun-if-env-changed=MOCAP_SERVO");
     let servo: u8 = match env::var("MOCAP_SERVO").as_deref().map(str::trim) {
         Ok("") | Err(env::VarError::NotPresent) => 0,
         Ok("maestro") => 1,
+        Ok("ssc32") => 2,
         Ok(v) => fail(&format!(
-            "mocap-firmware: MOCAP_SERVO must be `maestro` (or unset), got '{v}'"
+            "mocap-firmware: MOCAP_SERVO must be `maestro` or `ssc32` (or unset), got '{v}'"
         )),
         Err(e) => fail(&format!("mocap-firmware: MOCAP_SERVO: {e}")),
     };
     let config = format!(
         "/// Sampling period in µs (`MOCAP_SAMPLE_US`); 0 plays every frame.\n\
          pub const SAMPLE_US: u64 = {sample_us};\n\
-         /// Servo mode (`MOCAP_SERVO`): 0 off, 1 Pololu Maestro.\n\
+         /// Servo mode (`MOCAP_SERVO`): 0 off, 1 Pololu Maestro, 2 SSC-32.\n\
          pub const SERVO: u8 = {servo};\n"
     );
     let config_path = out_dir.join("config.rs");

@@ -1,15 +1,20 @@
-//! Servo mode (`MOCAP_SERVO=maestro`): plays a servo clip (one with a rig table, SPEC.md §3.5)
+//! Servo mode (`MOCAP_SERVO=maestro` or `ssc32`): plays a servo clip (one with a rig table, SPEC.md §3.5)
 //! the way an animatronic controller does — a fixed-rate tick at the rig's rate, `sample_at`,
 //! the rig's integer angle-to-pulse mapping, `mocap_servo::Limiter` (pulse range and speed),
-//! then the Pololu Maestro Set Target bytes of every servo — and finally brings every servo
-//! back to neutral at its speed limit. Each tick's bytes are printed as one line of hex
-//! (`m 84 00 70 2e …`), which the host's `mocap play … --protocol maestro` must reproduce
-//! byte for byte. Only the tick's work is timed, not the printing.
+//! then the Pololu Maestro Set Target bytes of every servo or one SSC-32 group move — and
+//! finally brings every servo back to neutral at its speed limit. Each tick is printed as one
+//! line — Maestro bytes as hex (`m 84 00 70 2e …`), SSC-32 as its text without the `\r`
+//! (`s #0P1500#1P1625T20`) — which the host's `mocap play … --protocol maestro|ssc32` must
+//! reproduce byte for byte. Only the tick's work is timed, not the printing.
 
 use mocap_decoder::{tick_count, tick_us, Clip, Player, RigServo};
-use mocap_servo::{maestro, Limiter, ServoLimits};
+use mocap_servo::{maestro, ssc32, Limiter, ServoLimits};
 
+use crate::config::SERVO;
 use crate::{decoder_glue, instructions, ticks, Failure, Out, MAX_CHANNELS};
+
+/// Bytes of one tick's commands (SSC-32 text is the longer).
+const TICK_BYTES: usize = ssc32::group_move_max_len(MAX_SERVOS);
 
 /// Most servos of a rig in this firmware.
 pub const MAX_SERVOS: usize = 32;
@@ -21,6 +26,7 @@ struct Rig {
     servos: [RigServo; MAX_SERVOS],
     count: usize,
     limiter: Limiter<MAX_SERVOS>,
+    rate_mhz: u32,
 }
 
 pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Result<(), Failure> {
@@ -62,11 +68,13 @@ pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Resu
         servos,
         count,
         limiter,
+        rate_mhz,
     };
     let mut player = decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?;
     let duration_us = clip.header().duration_us();
     let n_ticks = tick_count(duration_us, rate_mhz);
-    text.str("# mode=servo protocol=maestro")
+    text.str("# mode=servo protocol=")
+        .str(if SERVO == 2 { "ssc32" } else { "maestro" })
         .kv("servos", count as u64)
         .kv("rate_mhz", u64::from(rate_mhz))
         .kv("ticks", n_ticks)
@@ -74,7 +82,7 @@ pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Resu
 
     let mut out = [0i32; MAX_CHANNELS];
     let mut held = [0u16; MAX_SERVOS];
-    let mut bytes = [0u8; MAX_SERVOS * maestro::SET_TARGET_LEN];
+    let mut bytes = [0u8; TICK_BYTES];
     let (mut total, mut worst) = (0u64, 0u32);
     for i in 0..n_ticks {
         let start = ticks::now();
@@ -89,7 +97,7 @@ pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Resu
         let spent = ticks::since(start, ticks::now());
         total += u64::from(spent);
         worst = worst.max(spent);
-        print_hex(text, bytes.get(..len).unwrap_or(&[]));
+        print_tick(text, bytes.get(..len).unwrap_or(&[]));
     }
     for _ in 0..MAX_STOP_TICKS {
         let done = rig
@@ -97,7 +105,7 @@ pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Resu
             .stop_step(&mut held)
             .map_err(|_| Failure::Servo("stop"))?;
         let len = encode(&rig, &held, &mut bytes)?;
-        print_hex(text, bytes.get(..len).unwrap_or(&[]));
+        print_tick(text, bytes.get(..len).unwrap_or(&[]));
         if done {
             break;
         }
@@ -128,7 +136,7 @@ fn tick(
     t_us: u64,
     out: &mut [i32; MAX_CHANNELS],
     held: &mut [u16; MAX_SERVOS],
-    bytes: &mut [u8; MAX_SERVOS * maestro::SET_TARGET_LEN],
+    bytes: &mut [u8; TICK_BYTES],
 ) -> Result<usize, Failure> {
     decoder_glue::sample_at(player, t_us, out).map_err(|e| Failure::Decoder("sample", e))?;
     let mut targets = [6000u16; MAX_SERVOS];
@@ -147,6 +155,29 @@ fn tick(
 }
 
 fn encode(rig: &Rig, held: &[u16; MAX_SERVOS], bytes: &mut [u8]) -> Result<usize, Failure> {
+    if SERVO == 2 {
+        // One group move: the rig's outputs must be consecutive, in rig order.
+        let first = rig.servos.first().map_or(0, |s| s.output);
+        let in_order = rig
+            .servos
+            .iter()
+            .take(rig.count)
+            .enumerate()
+            .all(|(i, s)| usize::from(s.output) == usize::from(first) + i);
+        let first = u8::try_from(first).map_err(|_| Failure::Servo("output above 255"))?;
+        if !in_order {
+            return Err(Failure::Servo(
+                "ssc32 needs consecutive outputs in rig order",
+            ));
+        }
+        // The tick in ms, rounded (as `mocap play`).
+        let mhz = u64::from(rig.rate_mhz.max(1));
+        let period_ms = (1_000_000 + mhz / 2) / mhz;
+        let time_ms = u16::try_from(period_ms).unwrap_or(u16::MAX).max(1);
+        let pulses = held.get(..rig.count).unwrap_or(&[]);
+        return ssc32::group_move(first, pulses, time_ms, bytes)
+            .map_err(|_| Failure::Servo("ssc32"));
+    }
     let mut at = 0;
     for (s, &p) in rig.servos.iter().zip(held.iter()).take(rig.count) {
         let ch = u8::try_from(s.output).map_err(|_| Failure::Servo("output above 255"))?;
@@ -156,7 +187,14 @@ fn encode(rig: &Rig, held: &[u16; MAX_SERVOS], bytes: &mut [u8]) -> Result<usize
     Ok(at)
 }
 
-fn print_hex(text: &mut Out, bytes: &[u8]) {
+fn print_tick(text: &mut Out, bytes: &[u8]) {
+    if SERVO == 2 {
+        let line = bytes.strip_suffix(b"\r").unwrap_or(bytes);
+        text.str("s ")
+            .str(core::str::from_utf8(line).unwrap_or("?"))
+            .nl();
+        return;
+    }
     const HEX: &[u8; 16] = b"0123456789abcdef";
     text.str("m");
     for b in bytes {

@@ -191,10 +191,10 @@ fn pca_spline_firmware_output_matches_host_on_three_cores() {
 
 /// Servo mode: the demo's servo clip (`mocap encode --rig`) played by the
 /// firmware at 50 Hz through the rig mapping and the limiter must send the
-/// same Pololu Maestro bytes as `mocap play --protocol maestro`.
+/// same Pololu Maestro bytes and SSC-32 text as `mocap play`.
 #[test]
-fn servo_clip_maestro_bytes_match_host_on_three_cores() {
-    use mocap_encoder::play::{servo_clip_stream, Protocol};
+fn servo_clip_commands_match_host_on_three_cores() {
+    use mocap_encoder::play::Protocol;
     use mocap_encoder::rig::Rig;
     use mocap_encoder::servo_clip;
     if !qemu_available() {
@@ -219,20 +219,38 @@ fn servo_clip_maestro_bytes_match_host_on_three_cores() {
     let path = dir.join("servo-demo.mcb");
     std::fs::write(&path, &bytes).unwrap();
     let clip = Clip::parse(&bytes).unwrap();
-    let stream = servo_clip_stream(&clip, Protocol::Maestro, None).unwrap();
+    for (protocol, name) in [(Protocol::Maestro, "maestro"), (Protocol::Ssc32, "ssc32")] {
+        check_servo_mode(&clip, &path, protocol, name);
+    }
+}
+
+fn check_servo_mode(
+    clip: &Clip<'_>,
+    path: &Path,
+    protocol: mocap_encoder::play::Protocol,
+    name: &str,
+) {
+    use mocap_encoder::play::{servo_clip_stream, Protocol};
+    let stream = servo_clip_stream(clip, protocol, None).unwrap();
     let expected: String = stream
         .ticks
         .iter()
-        .map(|t| {
-            let mut line = String::from("m");
-            for b in t {
-                line += &format!(" {b:02x}");
+        .map(|t| match protocol {
+            Protocol::Maestro => {
+                let mut line = String::from("m");
+                for b in t {
+                    line += &format!(" {b:02x}");
+                }
+                line + "\n"
             }
-            line + "\n"
+            Protocol::Ssc32 => {
+                let text = std::str::from_utf8(t).unwrap();
+                format!("s {}\n", text.strip_suffix('\r').unwrap())
+            }
         })
         .collect();
     for board in BOARDS {
-        let uart = run_board_with(board, &path, None, Some("maestro"));
+        let uart = run_board_with(board, path, None, Some(name));
         let data: String = uart
             .lines()
             .filter(|l| !l.starts_with('#'))
@@ -240,13 +258,13 @@ fn servo_clip_maestro_bytes_match_host_on_three_cores() {
             .collect();
         assert!(
             data == expected,
-            "servo clip on {board}: Maestro bytes differ from mocap play ({} vs {} ticks)",
+            "servo clip on {board}: {name} commands differ from mocap play ({} vs {} ticks)",
             data.lines().count(),
             expected.lines().count()
         );
         let stats: Vec<&str> = uart.lines().filter(|l| l.starts_with("# ")).collect();
         eprintln!(
-            "servo clip on {board}: {} ticks of Maestro bytes identical; {}",
+            "servo clip on {board}: {} ticks of {name} commands identical; {}",
             stream.ticks.len(),
             stats.join("; ")
         );
