@@ -86,19 +86,24 @@ pub fn uart_text(frames: &[i32], channels: usize) -> String {
 /// duration, in the format of [`uart_text`].
 pub fn uart_text_sampled(clip: &Clip<'_>, period_us: u64) -> Result<String, mocap_decoder::Error> {
     assert!(period_us > 0, "sampling period must be > 0 µs");
-    let mut player = Box::new(Player::<HOST_MAX_CHANNELS>::new(clip)?);
-    let channels = player.channel_count();
     let duration_us = clip.header().duration_us();
-    let mut out = vec![0i32; channels];
+    let count = duration_us / period_us + 2;
+    let samples = sample_all(clip, (0..count).map(|i| i * period_us))?;
+    Ok(uart_text(&samples, clip.header().channel_count()))
+}
+
+/// `Player::sample_at` at each of `times_us`: `times × channels`,
+/// time-major.
+pub fn sample_all(
+    clip: &Clip<'_>,
+    times_us: impl IntoIterator<Item = u64>,
+) -> Result<Vec<i32>, mocap_decoder::Error> {
+    let mut player = Box::new(Player::<HOST_MAX_CHANNELS>::new(clip)?);
+    let mut out = vec![0i32; player.channel_count()];
     let mut samples = Vec::new();
-    let mut t = 0u64;
-    loop {
+    for t in times_us {
         player.sample_at(t, &mut out)?;
         samples.extend_from_slice(&out);
-        if t > duration_us {
-            break;
-        }
-        t += period_us;
     }
-    Ok(uart_text(&samples, channels))
+    Ok(samples)
 }

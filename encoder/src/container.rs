@@ -100,12 +100,6 @@ impl HeaderWire {
     /// as outward-rounded bounds in units of 2^10.
     pub fn to_compact(&self) -> Vec<u8> {
         let mut out = Vec::new();
-        let varint = |out: &mut Vec<u8>, v: u32| {
-            out.extend_from_slice(postcard::to_stdvec(&v).expect("u32").as_slice())
-        };
-        let zigzag = |out: &mut Vec<u8>, v: i32| {
-            out.extend_from_slice(postcard::to_stdvec(&v).expect("i32").as_slice())
-        };
         varint(&mut out, self.frame_time_ns);
         varint(&mut out, self.frame_count);
         varint(&mut out, self.source_unit_nm);
@@ -138,6 +132,20 @@ impl HeaderWire {
         }
         out
     }
+}
+
+/// Appends `v` as a postcard varint (LEB128, SPEC.md §3.1).
+pub fn varint(out: &mut Vec<u8>, mut v: u32) {
+    while v >= 0x80 {
+        out.push((v as u8) | 0x80);
+        v >>= 7;
+    }
+    out.push(v as u8);
+}
+
+/// Appends `v` zigzag-encoded as a postcard varint (SPEC.md §3.1).
+pub fn zigzag(out: &mut Vec<u8>, v: i32) {
+    varint(out, ((v << 1) ^ (v >> 31)) as u32);
 }
 
 /// Assembles sections into a container: preamble, section table, payloads

@@ -326,6 +326,39 @@ fn first_difference(a: &[Vec<i32>], b: &[Vec<i32>]) -> Option<(usize, usize)> {
         .find_map(|(c, (x, y))| x.iter().zip(y).position(|(p, q)| p != q).map(|f| (c, f)))
 }
 
+/// A log-bisection for the largest parameter in `[lo, hi]` whose attempt
+/// meets the bound (size falls as the parameter grows): at most `steps`
+/// rounds, stopping once `hi / lo < ratio`. Returns the smallest holding
+/// attempt seen (if any), the largest holding parameter found (`lo`) and
+/// the attempts made.
+fn bisect(
+    bound: &Bound,
+    (mut lo, mut hi): (f64, f64),
+    steps: usize,
+    ratio: f64,
+    mut run: impl FnMut(f64) -> Result<Attempt, String>,
+) -> Result<(Option<Attempt>, f64, usize), String> {
+    let mut best: Option<Attempt> = None;
+    let mut attempts = 0;
+    for _ in 0..steps {
+        attempts += 1;
+        let x = (lo * hi).sqrt();
+        let a = run(x)?;
+        if bound.holds(&a.metrics) {
+            lo = x;
+            if best.as_ref().is_none_or(|b| a.bytes.len() <= b.bytes.len()) {
+                best = Some(a);
+            }
+        } else {
+            hi = x;
+        }
+        if hi / lo < ratio {
+            break;
+        }
+    }
+    Ok((best, lo, attempts))
+}
+
 /// Channel weights for the `pca-spline` tolerance: millimetres of joint
 /// movement per fixed-point unit under a position bound (rotation: the
 /// joint's lever arm, blended with its RMS lever under an ARMS bound; feet
@@ -382,19 +415,19 @@ pub fn pca_weights(
 /// branch from.
 pub fn pca_groups(m: &Motion, min_channels: usize) -> Vec<Vec<usize>> {
     let joints = &m.skeleton.joints;
-    let children = |j: usize| {
-        joints
-            .iter()
-            .filter(|k| k.parent == Some(j) && !k.end_site)
-            .count()
-    };
+    let mut children = vec![0usize; joints.len()];
+    for joint in joints.iter().filter(|j| !j.end_site) {
+        if let Some(p) = joint.parent {
+            children[p] += 1;
+        }
+    }
     // Chain of each joint: a joint continues its parent's chain when it is
     // the parent's only child.
     let mut chain: Vec<usize> = Vec::with_capacity(joints.len());
     let mut parent_chain: Vec<Option<usize>> = Vec::new();
-    for (j, joint) in joints.iter().enumerate() {
+    for joint in joints {
         match joint.parent {
-            Some(p) if children(p) == 1 && joints[p].parent.is_some() => chain.push(chain[p]),
+            Some(p) if children[p] == 1 && joints[p].parent.is_some() => chain.push(chain[p]),
             Some(p) => {
                 chain.push(parent_chain.len());
                 parent_chain.push(Some(chain[p]));
@@ -404,7 +437,6 @@ pub fn pca_groups(m: &Motion, min_channels: usize) -> Vec<Vec<usize>> {
                 parent_chain.push(None);
             }
         }
-        let _ = j;
     }
     let mut size = vec![0usize; parent_chain.len()];
     for (joint, &c) in joints.iter().zip(&chain) {
@@ -500,35 +532,8 @@ fn encode_pca(
         }
         try_model(&model)
     };
-    let (mut lo, mut hi) = (scale / 256.0, scale * 2.0);
-    let mut best: Option<Attempt> = None;
-    let mut attempts = 0;
-    for _ in 0..20 {
-        attempts += 1;
-        let tau = (lo * hi).sqrt();
-        let a = run(tau)?;
-        if std::env::var_os("MOCAP_TRACE").is_some() {
-            eprintln!(
-                "tau {tau:.3}: {} B, max {:.1} mm at {} f{}, ARMS {:.2}",
-                a.bytes.len(),
-                a.metrics.max_joint_err_mm,
-                a.metrics.max_joint_err_joint,
-                a.metrics.max_joint_err_frame,
-                a.metrics.arms_mm
-            );
-        }
-        if opts.bound.holds(&a.metrics) {
-            lo = tau;
-            if best.as_ref().is_none_or(|b| a.bytes.len() <= b.bytes.len()) {
-                best = Some(a);
-            }
-        } else {
-            hi = tau;
-        }
-        if hi / lo < 1.02 {
-            break;
-        }
-    }
+    let (mut best, lo, mut attempts) =
+        bisect(&opts.bound, (scale / 256.0, scale * 2.0), 20, 1.02, run)?;
     // Size and error are not quite monotonic in τ: probe a little above
     // the boundary too and keep the smallest clip that holds.
     for i in 1..=6 {
@@ -628,24 +633,10 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
             // Bisect the position budget: errors of every joint up the chain
             // add up, so the budget per channel is a fraction of the bound.
             let bound_um = p * 1000.0;
-            let (mut lo, mut hi) = (bound_um * 1e-3, bound_um);
-            let mut best: Option<Attempt> = None;
-            for _ in 0..14 {
-                attempts += 1;
-                let s = (lo * hi).sqrt();
-                let a = run(Some(s), 1.0)?;
-                if opts.bound.holds(&a.metrics) {
-                    lo = s;
-                    if best.as_ref().is_none_or(|b| a.bytes.len() <= b.bytes.len()) {
-                        best = Some(a);
-                    }
-                } else {
-                    hi = s;
-                }
-                if hi / lo < 1.03 {
-                    break;
-                }
-            }
+            let (best, lo, n) = bisect(&opts.bound, (bound_um * 1e-3, bound_um), 14, 1.03, |s| {
+                run(Some(s), 1.0)
+            })?;
+            attempts += n;
             match best {
                 Some(b) => b,
                 None => {

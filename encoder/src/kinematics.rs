@@ -116,24 +116,32 @@ pub fn all_positions(m: &crate::motion::Motion) -> Vec<[f64; 3]> {
     all
 }
 
+/// Calls `f(ancestor, distance²)` for every joint and each of its
+/// ancestors, with rest-pose (all channels zero) positions.
+fn for_each_ancestor(skeleton: &Skeleton, mut f: impl FnMut(usize, f64)) {
+    let rest = vec![0.0; skeleton.channel_count()];
+    let mut pos = Vec::new();
+    joint_positions(skeleton, &rest, &mut pos);
+    for (j, p) in pos.iter().enumerate() {
+        let mut ancestor = skeleton.joints[j].parent;
+        while let Some(a) = ancestor {
+            let q = pos[a];
+            f(
+                a,
+                (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2),
+            );
+            ancestor = skeleton.joints[a].parent;
+        }
+    }
+}
+
 /// For each joint, the largest rest-pose (all channels zero) distance from
 /// that joint to any of its descendants, End Sites included, in skeleton
 /// units; 0 for leaves. A rotation error of θ radians at a joint moves its
 /// subtree by at most `lever_arms[j] · θ`.
 pub fn lever_arms(skeleton: &Skeleton) -> Vec<f64> {
-    let rest = vec![0.0; skeleton.channel_count()];
-    let mut pos = Vec::new();
-    joint_positions(skeleton, &rest, &mut pos);
     let mut lever = vec![0.0f64; skeleton.joints.len()];
-    for (j, p) in pos.iter().enumerate() {
-        let mut ancestor = skeleton.joints[j].parent;
-        while let Some(a) = ancestor {
-            let q = pos[a];
-            let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
-            lever[a] = lever[a].max(d);
-            ancestor = skeleton.joints[a].parent;
-        }
-    }
+    for_each_ancestor(skeleton, |a, d2| lever[a] = lever[a].max(d2.sqrt()));
     lever
 }
 
@@ -142,18 +150,8 @@ pub fn lever_arms(skeleton: &Skeleton) -> Vec<f64> {
 /// 0): a rotation error of θ radians at the joint adds at most
 /// `θ · rms_levers[j]` to the frame's RMS joint error (ARMS).
 pub fn rms_levers(skeleton: &Skeleton) -> Vec<f64> {
-    let rest = vec![0.0; skeleton.channel_count()];
-    let mut pos = Vec::new();
-    joint_positions(skeleton, &rest, &mut pos);
     let mut sum = vec![0.0f64; skeleton.joints.len()];
-    for (j, p) in pos.iter().enumerate() {
-        let mut ancestor = skeleton.joints[j].parent;
-        while let Some(a) = ancestor {
-            let q = pos[a];
-            sum[a] += (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
-            ancestor = skeleton.joints[a].parent;
-        }
-    }
+    for_each_ancestor(skeleton, |a, d2| sum[a] += d2);
     let n = skeleton.joints.len().max(1) as f64;
     sum.into_iter().map(|s| (s / n).sqrt()).collect()
 }

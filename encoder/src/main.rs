@@ -134,16 +134,8 @@ enum Command {
         /// Servo controller protocol.
         #[arg(long, value_enum)]
         protocol: mocap_encoder::play::Protocol,
-        /// Serial device to write to (e.g. /dev/ttyACM0; configure its baud
-        /// rate beforehand, e.g. `stty -F /dev/ttyUSB0 115200 raw`).
-        #[arg(long, conflicts_with = "output", required_unless_present = "output")]
-        port: Option<PathBuf>,
-        /// Write the byte stream to this file instead of a port.
-        #[arg(long)]
-        output: Option<PathBuf>,
-        /// Do not pace the ticks in real time.
-        #[arg(long)]
-        fast: bool,
+        #[command(flatten)]
+        dest: Destination,
         /// Servo ticks per second (default: the rig's rate_hz).
         #[arg(long)]
         rate: Option<f64>,
@@ -152,15 +144,8 @@ enum Command {
     Send {
         /// Input .mcb clip.
         clip: PathBuf,
-        /// Serial device to write to.
-        #[arg(long, conflicts_with = "output", required_unless_present = "output")]
-        port: Option<PathBuf>,
-        /// Write the frames to this file instead of a port.
-        #[arg(long)]
-        output: Option<PathBuf>,
-        /// Do not pace the frames at the line rate.
-        #[arg(long)]
-        fast: bool,
+        #[command(flatten)]
+        dest: Destination,
         /// Line rate used for pacing, bit/s (8N1).
         #[arg(long, default_value_t = 115_200)]
         baud: u32,
@@ -176,6 +161,48 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+}
+
+/// Where `play` and `send` write, and whether they keep real time.
+#[derive(clap::Args, Debug)]
+struct Destination {
+    /// Serial device to write to (e.g. /dev/ttyACM0; set its line speed
+    /// beforehand, e.g. `stty -F /dev/ttyUSB0 115200 raw`).
+    #[arg(long, conflicts_with = "output", required_unless_present = "output")]
+    port: Option<PathBuf>,
+    /// Write the bytes to this file instead of a port.
+    #[arg(long)]
+    output: Option<PathBuf>,
+    /// Do not pace the writes in real time.
+    #[arg(long)]
+    fast: bool,
+}
+
+impl Destination {
+    /// Writes `chunks` in order, chunk `i` not before `due(i)` after the
+    /// start unless `--fast`; returns the path written.
+    fn write(
+        &self,
+        chunks: &[Vec<u8>],
+        due: impl Fn(usize) -> std::time::Duration,
+    ) -> Result<PathBuf, String> {
+        let dest = self
+            .port
+            .clone()
+            .or_else(|| self.output.clone())
+            .ok_or("give --port or --output")?;
+        let fail = |e: std::io::Error| format!("{}: {e}", dest.display());
+        let mut file = std::fs::File::create(&dest).map_err(fail)?;
+        let start = std::time::Instant::now();
+        for (i, chunk) in chunks.iter().enumerate() {
+            if !self.fast {
+                let at = start + due(i);
+                std::thread::sleep(at.saturating_duration_since(std::time::Instant::now()));
+            }
+            std::io::Write::write_all(&mut file, chunk).map_err(fail)?;
+        }
+        Ok(dest)
+    }
 }
 
 fn parse_bounds(s: &str) -> Result<Vec<BoundSpec>, String> {
@@ -489,18 +516,15 @@ fn run(cli: Cli) -> Result<(), String> {
             clip,
             rig,
             protocol,
-            port,
-            output,
-            fast,
+            dest,
             rate,
         } => {
             let bytes = read_clip(&clip)?;
-            let c = Clip::parse(&bytes).map_err(|e| format!("{}: {e}", clip.display()))?;
+            let c = parse_clip(&clip, &bytes)?;
             let s = match rig {
                 Some(rig) => {
                     let rig =
                         mocap_encoder::rig::Rig::read_file(&rig).map_err(|e| e.to_string())?;
-                    let rate = rate.unwrap_or(rig.rate_hz);
                     mocap_encoder::play::servo_stream(&c, &rig, protocol, rate)?
                 }
                 None => mocap_encoder::play::servo_clip_stream(&c, protocol, rate)?,
@@ -509,19 +533,8 @@ fn run(cli: Cli) -> Result<(), String> {
                 eprint!("{t}");
             }
             let rate = s.rate_hz;
-            let dest = port.or(output).ok_or("give --port or --output")?;
-            let mut file =
-                std::fs::File::create(&dest).map_err(|e| format!("{}: {e}", dest.display()))?;
             let period = std::time::Duration::from_secs_f64(1.0 / rate);
-            let start = std::time::Instant::now();
-            for (i, tick) in s.ticks.iter().enumerate() {
-                if !fast {
-                    let due = start + period * i as u32;
-                    std::thread::sleep(due.saturating_duration_since(std::time::Instant::now()));
-                }
-                std::io::Write::write_all(&mut file, tick)
-                    .map_err(|e| format!("{}: {e}", dest.display()))?;
-            }
+            let dest = dest.write(&s.ticks, |i| period * i as u32)?;
             eprintln!(
                 "{}: {} ticks at {rate} Hz ({} of the clip, {} back to neutral), {} bytes",
                 dest.display(),
@@ -534,28 +547,27 @@ fn run(cli: Cli) -> Result<(), String> {
         }
         Command::Send {
             clip,
-            port,
-            output,
-            fast,
+            dest,
             baud,
             looped,
         } => {
             let bytes = read_clip(&clip)?;
-            Clip::parse(&bytes).map_err(|e| format!("{}: {e}", clip.display()))?;
+            parse_clip(&clip, &bytes)?;
             let frames = mocap_encoder::play::clip_frames(&bytes, looped)?;
-            let dest = port.or(output).ok_or("give --port or --output")?;
-            let mut file =
-                std::fs::File::create(&dest).map_err(|e| format!("{}: {e}", dest.display()))?;
-            for f in &frames {
-                std::io::Write::write_all(&mut file, f)
-                    .map_err(|e| format!("{}: {e}", dest.display()))?;
-                if !fast {
-                    // 10 bits per byte on an 8N1 line.
-                    std::thread::sleep(std::time::Duration::from_secs_f64(
-                        f.len() as f64 * 10.0 / f64::from(baud.max(1)),
-                    ));
-                }
-            }
+            // Frame i goes out once the bytes before it have crossed the
+            // line: 10 bits per byte on an 8N1 line.
+            let before: Vec<usize> = frames
+                .iter()
+                .scan(0, |sent, f| {
+                    let at = *sent;
+                    *sent += f.len();
+                    Some(at)
+                })
+                .collect();
+            let bit = 1.0 / f64::from(baud.max(1));
+            let dest = dest.write(&frames, |i| {
+                std::time::Duration::from_secs_f64(before[i] as f64 * 10.0 * bit)
+            })?;
             eprintln!(
                 "{}: {} frames, {} bytes",
                 dest.display(),

@@ -4,12 +4,11 @@
 //! byte streams are built here; the CLI writes them to a port or a file,
 //! paced in real time unless `--fast`.
 
-use mocap_decoder::{Clip, Player};
+use mocap_decoder::{tick_count, tick_us, Clip, RigServo};
 use mocap_servo::{maestro, ssc32, stream, Limiter, Message, ServoLimits};
 
-use crate::clipfile;
-use crate::fixed;
 use crate::rig::{Rig, ServoTracks};
+use crate::{clipfile, fixed, servo_clip};
 
 /// Serial servo-controller protocol.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -23,8 +22,6 @@ pub enum Protocol {
 
 /// Most servos a rig may drive here.
 pub const MAX_SERVOS: usize = 64;
-/// Most channels a clip may have for `play` (the host player's capacity).
-const MAX_CHANNELS: usize = 4096;
 /// Upper bound on the ticks of the return to neutral.
 const MAX_STOP_TICKS: usize = 100_000;
 
@@ -53,31 +50,92 @@ impl ServoStream {
     }
 }
 
+/// Servo rate in millihertz from an optional `--rate` (Hz).
+fn rate_mhz(rate_hz: Option<f64>, default_mhz: u32) -> Result<u32, String> {
+    match rate_hz {
+        Some(r) if r.is_finite() && r > 0.0 => {
+            Ok((r * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32)
+        }
+        Some(r) => Err(format!("servo rate {r} Hz must be positive")),
+        None => Ok(default_mhz),
+    }
+}
+
+/// The clip sampled with `sample_at` at every servo tick (the integer
+/// timing the firmware uses: `tick_count`, `tick_us`), `ticks × channels`.
+fn sample_ticks(clip: &Clip<'_>, rate_mhz: u32) -> Result<(usize, Vec<i32>), String> {
+    let count = tick_count(clip.header().duration_us(), rate_mhz);
+    let samples = clipfile::sample_all(clip, (0..count).map(|i| tick_us(i, rate_mhz)))
+        .map_err(|e| e.to_string())?;
+    Ok((count as usize, samples))
+}
+
 /// Plays a servo clip (one with a rig table, SPEC.md §3.5) at its rig's
 /// rate or `rate_hz`: each channel's decoded angle becomes its servo's
 /// pulse through `RigServo::pulse_qus` — the firmware's own integer
-/// mapping — then the same [`Limiter`] and return to neutral as
-/// [`servo_stream`].
+/// mapping — then [`drive`].
 pub fn servo_clip_stream(
     clip: &Clip<'_>,
     protocol: Protocol,
     rate_hz: Option<f64>,
 ) -> Result<ServoStream, String> {
     let rig = clip.rig().ok_or("not a servo clip: give --rig")?;
-    let servos: Vec<_> = rig.servos().collect();
-    if servos.len() > MAX_SERVOS {
-        return Err(format!("{} servos, at most {MAX_SERVOS}", servos.len()));
+    let servos: Vec<RigServo> = rig.servos().collect();
+    let rate_mhz = rate_mhz(rate_hz, rig.rate_mhz())?;
+    let (count, samples) = sample_ticks(clip, rate_mhz)?;
+    let n = clip.header().channel_count().max(1);
+    let targets = (0..count).map(|i| {
+        let pose = &samples[i * n..(i + 1) * n];
+        servos
+            .iter()
+            .zip(pose)
+            .map(|(s, &v)| s.pulse_qus(v))
+            .collect()
+    });
+    drive(targets, &servos, rate_mhz, protocol, None)
+}
+
+/// Samples a motion clip at the rig's rate (or `rate_hz`), maps it through
+/// `rig` (expression, angle range, speed and acceleration limits, with the
+/// clamp report), then [`drive`].
+pub fn servo_stream(
+    clip: &Clip<'_>,
+    rig: &Rig,
+    protocol: Protocol,
+    rate_hz: Option<f64>,
+) -> Result<ServoStream, String> {
+    let rate_mhz = rate_mhz(rate_hz, servo_clip::rate_mhz(rig))?;
+    let skeleton = clipfile::skeleton(clip);
+    let channels = rig.resolve(&skeleton).map_err(|e| e.to_string())?;
+    let (count, samples) = sample_ticks(clip, rate_mhz)?;
+    let metres_per_unit = f64::from(clip.header().source_unit_nm()) * 1e-9;
+    let frame_time = 1000.0 / f64::from(rate_mhz);
+    let motion = fixed::from_fixed(&skeleton, frame_time, &samples, metres_per_unit);
+    let tracks = rig.servo_tracks(&motion, &channels, metres_per_unit);
+    let servos: Vec<RigServo> = rig.servos.iter().map(servo_clip::table_entry).collect();
+    let targets: Vec<Vec<u16>> = (0..count)
+        .map(|i| tracks.servos.iter().map(|t| t.pulses[i]).collect())
+        .collect();
+    drive(targets, &servos, rate_mhz, protocol, Some(tracks))
+}
+
+/// Holds every tick's targets to the servos' pulse range and speed with
+/// [`Limiter`] — whatever they are, no pulse leaves its range or moves
+/// faster than its speed limit — encodes them, and returns every servo to
+/// neutral at its speed limit. The limiter starts at neutral (the servos'
+/// real position at power-on is unknown): the first ticks move towards the
+/// clip's first pose at the speed limit.
+fn drive(
+    targets: impl IntoIterator<Item = Vec<u16>>,
+    servos: &[RigServo],
+    rate_mhz: u32,
+    protocol: Protocol,
+    tracks: Option<ServoTracks>,
+) -> Result<ServoStream, String> {
+    let n_servos = servos.len();
+    if n_servos > MAX_SERVOS {
+        return Err(format!("{n_servos} servos, at most {MAX_SERVOS}"));
     }
-    // Integer timing and limits, exactly as the firmware computes them
-    // (`tick_count`, `tick_us`, `RigServo::max_step_qus`).
-    let rate_mhz = match rate_hz {
-        Some(r) if r.is_finite() && r > 0.0 => {
-            (r * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
-        }
-        Some(r) => return Err(format!("servo rate {r} Hz must be positive")),
-        None => rig.rate_mhz(),
-    };
-    let rate_hz = f64::from(rate_mhz) / 1000.0;
     let limits: Vec<ServoLimits> = servos
         .iter()
         .map(|s| {
@@ -86,138 +144,18 @@ pub fn servo_clip_stream(
                 .map_err(|e| format!("servo output {}: {e}", s.output))
         })
         .collect::<Result<_, _>>()?;
-    let duration_us = clip.header().duration_us();
-    let count = mocap_decoder::tick_count(duration_us, rate_mhz) as usize;
-    let mut player = Box::new(Player::<MAX_SERVOS>::new(clip).map_err(|e| e.to_string())?);
-    let mut out = [0i32; MAX_SERVOS];
-    let targets = (0..count).map(move |i| {
-        let t_us = mocap_decoder::tick_us(i as u64, rate_mhz);
-        player
-            .sample_at(t_us, &mut out)
-            .map_err(|e| e.to_string())
-            .map(|()| {
-                servos
-                    .iter()
-                    .zip(&out)
-                    .map(|(s, &v)| s.pulse_qus(v))
-                    .collect::<Vec<u16>>()
-            })
-    });
-    let outputs: Vec<u16> = clip
-        .rig()
-        .map(|r| r.servos().map(|s| s.output).collect())
-        .unwrap_or_default();
-    drive(targets, &limits, &outputs, protocol, rate_hz, count, None)
-}
-
-/// Samples `clip` at `rate_hz` with `sample_at`, maps it through `rig`
-/// (expression, angle range, speed and acceleration limits), holds every
-/// pulse to the rig's pulse range and speed with [`Limiter`], then brings
-/// every servo back to neutral at its speed limit.
-pub fn servo_stream(
-    clip: &Clip<'_>,
-    rig: &Rig,
-    protocol: Protocol,
-    rate_hz: f64,
-) -> Result<ServoStream, String> {
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(format!("servo rate {rate_hz} Hz must be positive"));
-    }
-    let n_servos = rig.servos.len();
-    if n_servos > MAX_SERVOS {
-        return Err(format!(
-            "{}: {n_servos} servos, at most {MAX_SERVOS}",
-            rig.file
-        ));
-    }
-    let skeleton = clipfile::skeleton(clip);
-    let channels = rig.resolve(&skeleton).map_err(|e| e.to_string())?;
-    let h = clip.header();
-    let n = h.channel_count();
-    if n > MAX_CHANNELS {
-        return Err(format!(
-            "{n} channels, `play` handles at most {MAX_CHANNELS}"
-        ));
-    }
-    // The clip at the servo rate, sampled exactly as the MCU would.
-    let period_us = 1e6 / rate_hz;
-    let count = (h.duration_us() as f64 / period_us).floor() as usize + 1;
-    let mut player = Box::new(Player::<MAX_CHANNELS>::new(clip).map_err(|e| e.to_string())?);
-    let mut out = vec![0i32; n];
-    let mut frames = Vec::with_capacity(count * n);
-    for i in 0..count {
-        let t_us = (i as f64 * period_us).round() as u64;
-        player
-            .sample_at(t_us, &mut out)
-            .map_err(|e| e.to_string())?;
-        frames.extend_from_slice(&out);
-    }
-    let metres_per_unit = f64::from(h.source_unit_nm()) * 1e-9;
-    let motion = fixed::from_fixed(&skeleton, 1.0 / rate_hz, &frames, metres_per_unit);
-    let tracks = rig.servo_tracks(&motion, &channels, metres_per_unit);
-
-    // The last line of defence: whatever the tracks say, no pulse leaves
-    // the rig's range or moves faster than its speed limit.
-    let limits: Vec<ServoLimits> = rig
-        .servos
-        .iter()
-        .map(|s| {
-            let (lo, hi) = s.quarter_us_range();
-            let step = s.max_speed.map_or(0.0, |v| {
-                (v / rate_hz / s.degrees_per_us() * 4.0).ceil().max(1.0)
-            });
-            ServoLimits::new(
-                lo,
-                hi,
-                s.neutral_quarter_us().clamp(lo, hi),
-                step.min(f64::from(u16::MAX)) as u16,
-            )
-            .map_err(|e| format!("{}: servo {}: {e}", rig.file, s.name))
-        })
-        .collect::<Result<_, _>>()?;
-    let outputs: Vec<u16> = rig.servos.iter().map(|s| s.output).collect();
-    let targets: Vec<Result<Vec<u16>, String>> = (0..count)
-        .map(|i| Ok(tracks.servos.iter().map(|t| t.pulses[i]).collect()))
-        .collect();
-    drive(
-        targets,
-        &limits,
-        &outputs,
-        protocol,
-        rate_hz,
-        count,
-        Some(tracks),
-    )
-}
-
-/// Holds every tick's targets to `limits` with [`Limiter`] — whatever they
-/// are, no pulse leaves its range or moves faster than its speed limit —
-/// encodes them, and returns every servo to neutral at its speed limit.
-/// The limiter starts at neutral (the servos' real position at power-on is
-/// unknown): the first ticks move towards the clip's first pose at the
-/// speed limit.
-fn drive(
-    targets: impl IntoIterator<Item = Result<Vec<u16>, String>>,
-    limits: &[ServoLimits],
-    outputs: &[u16],
-    protocol: Protocol,
-    rate_hz: f64,
-    count: usize,
-    tracks: Option<ServoTracks>,
-) -> Result<ServoStream, String> {
-    let n_servos = limits.len();
     let idle = ServoLimits::new(6000, 6000, 6000, 0).map_err(|e| e.to_string())?;
     let mut all = [idle; MAX_SERVOS];
-    all[..n_servos].copy_from_slice(limits);
+    all[..n_servos].copy_from_slice(&limits);
     let mut limiter = Limiter::new(all).map_err(|e| e.to_string())?;
+    let rate_hz = f64::from(rate_mhz) / 1000.0;
     let time_ms = (1000.0 / rate_hz).round().clamp(1.0, f64::from(u16::MAX)) as u16;
-    let encode = |pulses: &[u16]| command(protocol, outputs, pulses, time_ms);
-    let mut ticks = Vec::with_capacity(count + 16);
-    let mut sent = Vec::with_capacity(count + 16);
+    let outputs: Vec<u16> = servos.iter().map(|s| s.output).collect();
+    let encode = |pulses: &[u16]| command(protocol, &outputs, pulses, time_ms);
+    let (mut ticks, mut sent) = (Vec::new(), Vec::new());
     let mut want = [6000u16; MAX_SERVOS];
     let mut held = [6000u16; MAX_SERVOS];
     for t in targets {
-        let t = t?;
         want[..n_servos].copy_from_slice(&t[..n_servos]);
         limiter.apply(&want, &mut held).map_err(|e| e.to_string())?;
         ticks.push(encode(&held[..n_servos])?);
@@ -238,7 +176,7 @@ fn drive(
         pulses: sent,
         clip_ticks,
         tracks,
-        limits: limits.to_vec(),
+        limits,
     })
 }
 

@@ -5,11 +5,12 @@
 //! angle to its pulse with the servo's limits, so the MCU writes decoded
 //! values straight to its outputs.
 
-use mocap_decoder::{consts, Clip, Player};
+use mocap_decoder::{consts, Clip, RigServo};
 
-use crate::container::assemble;
+use crate::clipfile;
+use crate::container::{assemble, varint, zigzag};
 use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
-use crate::rig::{Rig, ServoTracks};
+use crate::rig::{Rig, Servo, ServoTracks};
 
 /// The servo signals as a motion: servo `i` is root joint `i` with one
 /// `Zrotation` channel, in degrees of servo travel.
@@ -40,35 +41,45 @@ pub fn servo_motion(rig: &Rig, tracks: &ServoTracks) -> Motion {
     }
 }
 
+/// A rig servo as the rig table stores it (SPEC.md §3.5): integer
+/// millidegrees and quarter-microseconds, the form the decoder and the
+/// firmware map and limit with.
+pub fn table_entry(s: &Servo) -> RigServo {
+    let mdeg = |v: f64| (v * 1000.0).round() as i32;
+    let qus = |us: f64| (us * 4.0).round().clamp(0.0, f64::from(u16::MAX)) as u16;
+    RigServo {
+        output: s.output,
+        angle_lo_mdeg: mdeg(s.angle[0]),
+        angle_hi_mdeg: mdeg(s.angle[1]),
+        pulse_lo_qus: qus(s.pulse[0]),
+        pulse_hi_qus: qus(s.pulse[1]),
+        neutral_qus: s.neutral_quarter_us(),
+        max_speed_mdeg_s: s.max_speed.map_or(0, |v| {
+            (v * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
+        }),
+    }
+}
+
+/// The rig's servo rate in millihertz.
+pub fn rate_mhz(rig: &Rig) -> u32 {
+    (rig.rate_hz * 1000.0)
+        .round()
+        .clamp(1.0, f64::from(u32::MAX)) as u32
+}
+
 /// The rig section (SPEC.md §3.5).
 pub fn rig_section(rig: &Rig) -> Vec<u8> {
     let mut out = Vec::new();
-    let varint = |out: &mut Vec<u8>, v: u32| {
-        out.extend_from_slice(&postcard::to_stdvec(&v).expect("u32"));
-    };
-    let zigzag = |out: &mut Vec<u8>, v: i32| {
-        out.extend_from_slice(&postcard::to_stdvec(&v).expect("i32"));
-    };
-    varint(
-        &mut out,
-        (rig.rate_hz * 1000.0)
-            .round()
-            .clamp(1.0, f64::from(u32::MAX)) as u32,
-    );
+    varint(&mut out, rate_mhz(rig));
     varint(&mut out, rig.servos.len() as u32);
-    for s in &rig.servos {
+    for s in rig.servos.iter().map(table_entry) {
         out.extend_from_slice(&s.output.to_le_bytes());
-        zigzag(&mut out, (s.angle[0] * 1000.0).round() as i32);
-        zigzag(&mut out, (s.angle[1] * 1000.0).round() as i32);
-        varint(&mut out, (s.pulse[0] * 4.0).round() as u32);
-        varint(&mut out, (s.pulse[1] * 4.0).round() as u32);
-        varint(&mut out, u32::from(s.neutral_quarter_us()));
-        varint(
-            &mut out,
-            s.max_speed.map_or(0, |v| {
-                (v * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
-            }),
-        );
+        zigzag(&mut out, s.angle_lo_mdeg);
+        zigzag(&mut out, s.angle_hi_mdeg);
+        varint(&mut out, u32::from(s.pulse_lo_qus));
+        varint(&mut out, u32::from(s.pulse_hi_qus));
+        varint(&mut out, u32::from(s.neutral_qus));
+        varint(&mut out, s.max_speed_mdeg_s);
     }
     out
 }
@@ -92,19 +103,18 @@ pub fn attach_rig(clip: &[u8], rig: &Rig) -> Result<Vec<u8>, String> {
 /// decoder's own mapping (`RigServo::pulse_qus`).
 pub fn decoded_pulses(clip: &Clip<'_>) -> Result<Vec<Vec<u16>>, String> {
     let rig = clip.rig().ok_or("not a servo clip (no rig table)")?;
-    let servos: Vec<_> = rig.servos().collect();
-    let n = clip.header().channel_count();
-    let mut player = Box::new(Player::<4096>::new(clip).map_err(|e| e.to_string())?);
-    let mut out = vec![0i32; n];
-    let mut pulses = vec![Vec::new(); n];
-    while player
-        .next_frame(&mut out)
-        .map_err(|e| e.to_string())?
-        .is_some()
-    {
-        for ((p, s), v) in pulses.iter_mut().zip(&servos).zip(&out) {
-            p.push(s.pulse_qus(*v));
-        }
-    }
-    Ok(pulses)
+    let frames = clipfile::decode_all(clip).map_err(|e| e.to_string())?;
+    let n = clip.header().channel_count().max(1);
+    Ok(rig
+        .servos()
+        .enumerate()
+        .map(|(i, s)| {
+            frames
+                .iter()
+                .skip(i)
+                .step_by(n)
+                .map(|&v| s.pulse_qus(v))
+                .collect()
+        })
+        .collect())
 }

@@ -88,6 +88,14 @@ fn run_board_with(board: &str, clip: &Path, sample_us: Option<u64>, servo: Optio
     stdout
 }
 
+/// The UART output without its `#` statistics lines.
+fn data_lines(uart: &str) -> String {
+    uart.lines()
+        .filter(|l| !l.starts_with('#'))
+        .flat_map(|l| [l, "\n"])
+        .collect()
+}
+
 fn check(name: &str, m: &Motion, key_interval: Option<u16>) {
     check_codec(name, m, CodecChoice::Index, "1deg", key_interval, None);
 }
@@ -122,11 +130,7 @@ fn check_codec(
     };
     for board in BOARDS {
         let uart = run_board(board, &path, sample_us);
-        let data: String = uart
-            .lines()
-            .filter(|l| !l.starts_with('#'))
-            .flat_map(|l| [l, "\n"])
-            .collect();
+        let data = data_lines(&uart);
         assert!(
             data == expected,
             "{name} on {board}: UART output differs from the host decoder ({} vs {} bytes)",
@@ -251,11 +255,7 @@ fn check_servo_mode(
         .collect();
     for board in BOARDS {
         let uart = run_board_with(board, path, None, Some(name));
-        let data: String = uart
-            .lines()
-            .filter(|l| !l.starts_with('#'))
-            .flat_map(|l| [l, "\n"])
-            .collect();
+        let data = data_lines(&uart);
         assert!(
             data == expected,
             "servo clip on {board}: {name} commands differ from mocap play ({} vs {} ticks)",

@@ -5,18 +5,7 @@ use mocap_decoder::consts::pca::MAX_TIME_BITS;
 
 use super::{GroupModel, Model};
 use crate::codec::bits::BitWriter;
-
-fn varint(out: &mut Vec<u8>, mut v: u32) {
-    while v >= 0x80 {
-        out.push((v as u8) | 0x80);
-        v >>= 7;
-    }
-    out.push(v as u8);
-}
-
-fn zigzag(out: &mut Vec<u8>, v: i32) {
-    varint(out, ((v << 1) ^ (v >> 31)) as u32);
-}
+use crate::container::{varint, zigzag};
 
 fn index(out: &mut Vec<u8>, c: usize, wide: bool) {
     out.push(c as u8);
