@@ -8,7 +8,9 @@
 //! The playback mode is `$MOCAP_SAMPLE_US`: unset or empty plays every frame with
 //! `Player::next_frame`; a period P in µs (a whole number > 0) samples the clip with
 //! `Player::sample_at` at t = 0, P, 2P, … up to and including the first t past its duration.
-//! It reaches src/main.rs as `OUT_DIR/config.rs` (`const SAMPLE_US: u64`, 0 = every frame).
+//! It reaches src/main.rs as `OUT_DIR/config.rs` (`const SAMPLE_US: u64`, 0 = every frame),
+//! with the servo output (`$MOCAP_SERVO`, `const SERVO`) and the streaming mode
+//! (`$MOCAP_STREAM=1`, `const STREAM`).
 
 use std::env;
 use std::fs;
@@ -121,23 +123,44 @@ fn main() {
         Err(env::VarError::NotPresent) => 0,
         Err(e) => fail(&format!("mocap-firmware: MOCAP_SAMPLE_US: {e}")),
     };
-    // Servo mode: `MOCAP_SERVO=maestro|ssc32` plays a servo clip (one with a rig table) at
-    // its rig's rate and prints every tick's commands (Maestro as hex, SSC-32 as its text).
+    // Servo mode: `MOCAP_SERVO=maestro|ssc32|pwm|pca9685` plays a servo clip (one with a rig
+    // table) at its rig's rate through that output and prints what every tick sent (Maestro
+    // bytes as hex, SSC-32 text, the 16 PWM duties, the PCA9685's I²C writes).
     println!("cargo:rerun-if-env-changed=MOCAP_SERVO");
     let servo: u8 = match env::var("MOCAP_SERVO").as_deref().map(str::trim) {
         Ok("") | Err(env::VarError::NotPresent) => 0,
         Ok("maestro") => 1,
         Ok("ssc32") => 2,
+        Ok("pwm") => 3,
+        Ok("pca9685") => 4,
         Ok(v) => fail(&format!(
-            "mocap-firmware: MOCAP_SERVO must be `maestro` or `ssc32` (or unset), got '{v}'"
+            "mocap-firmware: MOCAP_SERVO must be `maestro`, `ssc32`, `pwm` or `pca9685` \
+             (or unset), got '{v}'"
         )),
         Err(e) => fail(&format!("mocap-firmware: MOCAP_SERVO: {e}")),
     };
+    // Streaming mode: `MOCAP_STREAM=1` receives clips and live poses over the UART (SPEC.md
+    // §8) and plays them on the rig of the embedded servo clip, through the MOCAP_SERVO
+    // output (Maestro when unset).
+    println!("cargo:rerun-if-env-changed=MOCAP_STREAM");
+    let stream = match env::var("MOCAP_STREAM").as_deref().map(str::trim) {
+        Ok("" | "0") | Err(env::VarError::NotPresent) => false,
+        Ok("1") => true,
+        Ok(v) => fail(&format!(
+            "mocap-firmware: MOCAP_STREAM must be 1 (or 0 / unset), got '{v}'"
+        )),
+        Err(e) => fail(&format!("mocap-firmware: MOCAP_STREAM: {e}")),
+    };
+    if stream && sample_us != 0 {
+        fail("mocap-firmware: MOCAP_STREAM and MOCAP_SAMPLE_US exclude each other");
+    }
     let config = format!(
         "/// Sampling period in µs (`MOCAP_SAMPLE_US`); 0 plays every frame.\n\
          pub const SAMPLE_US: u64 = {sample_us};\n\
-         /// Servo mode (`MOCAP_SERVO`): 0 off, 1 Pololu Maestro, 2 SSC-32.\n\
-         pub const SERVO: u8 = {servo};\n"
+         /// Servo mode (`MOCAP_SERVO`): 0 off, 1 Pololu Maestro, 2 SSC-32, 3 PWM, 4 PCA9685.\n\
+         pub const SERVO: u8 = {servo};\n\
+         /// Streaming mode (`MOCAP_STREAM=1`).\n\
+         pub const STREAM: bool = {stream};\n"
     );
     let config_path = out_dir.join("config.rs");
     if fs::read_to_string(&config_path).ok().as_deref() != Some(config.as_str()) {

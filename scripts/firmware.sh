@@ -7,13 +7,21 @@
 #       other's ELF). --sample-us P (µs, > 0) builds the sample mode (MOCAP_SAMPLE_US): the
 #       firmware prints Player::sample_at at t = 0, P, 2P, … up to and including the first t
 #       past the clip's duration instead of every frame.
-#   scripts/firmware.sh run --board B [--clip PATH.mcb] [--sample-us P] [--servo maestro] [--icount] [--timeout SECONDS]
-#       --servo maestro plays a servo clip (mocap encode --rig) at its rig's rate and prints the
-#       Pololu Maestro bytes of every tick as hex lines (MOCAP_SERVO; see firmware-example/README.md).
+#   scripts/firmware.sh run --board B [--clip PATH.mcb] [--sample-us P] [--servo OUTPUT] [--icount] [--timeout SECONDS]
+#       --servo maestro|ssc32|pwm|pca9685 plays a servo clip (mocap encode --rig) at its rig's
+#       rate through that output and prints one line per tick: Maestro bytes as hex, SSC-32
+#       text, the 16 duties of the (recorded) PWM channels, the (recorded) PCA9685 I²C writes
+#       (MOCAP_SERVO; see firmware-example/README.md).
+#       --stream builds the streaming mode (MOCAP_STREAM=1): the firmware reads postcard + COBS +
+#       CRC frames (SPEC.md §8, `mocap send`) from its UART and plays the uploaded clip or the
+#       live poses on the rig of --clip (a servo clip) through --servo (default maestro);
+#       --input FILE feeds FILE to the UART's receiver (QEMU's -serial stdio reads it from
+#       stdin, only as fast as the UART takes bytes); the run ends when the servos are parked
+#       after a Stop or after the uploaded clip.
 #       Builds, then runs the ELF in QEMU headless: the UART on stdout, semihosting on. The exit
 #       code is the firmware's (0 = every frame decoded), 124 on timeout (default 300 s).
 #       --icount adds `-icount shift=0` so the instruction figures in the output are exact.
-#   scripts/firmware.sh size --board B [--clip PATH.mcb] [--sample-us P]
+#   scripts/firmware.sh size --board B [--clip PATH.mcb] [--sample-us P] [--servo OUTPUT] [--stream]
 #       Builds, then prints key=value lines: text, data, bss, flash_bytes (text+data),
 #       ram_static_bytes (data+bss), flash_clip_bytes, flash_without_clip_bytes,
 #       decoder_code_bytes (code of mocap_decoder::*, crc::* and the firmware's out-of-line calls
@@ -79,6 +87,8 @@ ICOUNT=0
 TIMEOUT=300
 SAMPLE_US=""
 SERVO=""
+STREAM=""
+INPUT=/dev/null
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
@@ -89,6 +99,9 @@ while [ "$#" -gt 0 ]; do
         --sample-us=*) SAMPLE_US="${1#*=}"; shift ;;
         --servo) [ "$#" -ge 2 ] || die "--servo needs a protocol"; SERVO="$2"; shift 2 ;;
         --servo=*) SERVO="${1#*=}"; shift ;;
+        --stream) STREAM=1; shift ;;
+        --input) [ "$#" -ge 2 ] || die "--input needs a file"; INPUT="$2"; shift 2 ;;
+        --input=*) INPUT="${1#*=}"; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -108,6 +121,14 @@ case "$CMD" in
 esac
 TARGET="$(board_target "$BOARD")"
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be a whole number of seconds"
+[ -r "$INPUT" ] || die "--input: cannot read $INPUT"
+[ -n "$STREAM" ] && [ "$CMD" = run ] && [ "$INPUT" = /dev/null ] \
+    && die "run --stream needs --input FILE (e.g. from: mocap send CLIP --output FILE --fast)"
+[ -n "$STREAM" ] && [ -n "$SAMPLE_US" ] && die "--stream and --sample-us exclude each other"
+case "$SERVO" in
+    ""|maestro|ssc32|pwm|pca9685) ;;
+    *) die "--servo must be maestro, ssc32, pwm or pca9685, got '$SERVO'" ;;
+esac
 if [ -n "$SAMPLE_US" ]; then
     [[ "$SAMPLE_US" =~ ^[0-9]+$ ]] && [ "$((10#$SAMPLE_US))" -gt 0 ] \
         || die "--sample-us must be a whole number of microseconds > 0"
@@ -139,14 +160,15 @@ build() {
 
     target_dir="$FW/target/$BOARD"
     elf_dir="$target_dir/elf"
-    elf="$elf_dir/mocap-firmware-$sha${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}.elf"
+    elf="$elf_dir/mocap-firmware-$sha${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/$BOARD.lock"
     # One build per board at a time; the ELF is copied out under the lock.
     (
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
-        MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" CARGO_TARGET_DIR="$target_dir" \
+        MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
+            CARGO_TARGET_DIR="$target_dir" \
             mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
@@ -160,11 +182,12 @@ run_qemu() {
     local elf="$1" rc=0 qemu_args
     read -r -a qemu_args <<<"$(board_qemu_args "$BOARD")"
     [ "$ICOUNT" -eq 1 ] && qemu_args+=(-icount shift=0)
-    # No monitor, no display; UART0 (serial0) on stdout; stdin not shared with the caller.
+    # No monitor, no display; UART0 (serial0) on stdout, its receiver fed from --input (stdin
+    # of QEMU; /dev/null by default, never the caller's terminal).
     timeout -k 10 "$TIMEOUT" qemu-system-arm "${qemu_args[@]}" \
         -display none -monitor none -serial stdio \
         -semihosting-config enable=on,target=native \
-        -kernel "$elf" </dev/null || rc=$?
+        -kernel "$elf" <"$INPUT" || rc=$?
     if [ "$rc" -eq 124 ] || [ "$rc" -eq 137 ]; then
         printf 'firmware.sh: error: QEMU (%s) did not finish within %s s\n' "$BOARD" "$TIMEOUT" >&2
         exit 124

@@ -141,17 +141,26 @@ enum Command {
         rate: Option<f64>,
     },
     /// Stream a clip to the firmware's streaming mode (postcard + COBS + CRC frames).
+    ///
+    /// Writes a `00` and `Hello`, then either the clip in 64-byte `ClipChunk`s and `Play`
+    /// (the firmware plays it from its RAM), or with `--poses` one `Pose` per servo tick of a
+    /// servo clip, decoded here at the rig's rate (`seq` = tick number; the firmware holds the
+    /// last pose over lost ones), then `Stop`. See SPEC.md §8.
     Send {
         /// Input .mcb clip.
         clip: PathBuf,
         #[command(flatten)]
         dest: Destination,
-        /// Line rate used for pacing, bit/s (8N1).
+        /// Line rate used for pacing the clip upload, bit/s (8N1).
         #[arg(long, default_value_t = 115_200)]
         baud: u32,
         /// Ask the firmware to loop the clip.
-        #[arg(long = "loop")]
+        #[arg(long = "loop", conflicts_with = "poses")]
         looped: bool,
+        /// Send live poses (a servo clip's pulses at its rig's rate, paced in real time
+        /// unless --fast) instead of uploading the clip.
+        #[arg(long)]
+        poses: bool,
     },
     /// Motion Track picture (Hu et al. 2010): clips as curves in a 2-D map of key poses.
     Track(mocap_encoder::track::TrackArgs),
@@ -548,8 +557,29 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Send {
             clip,
             dest,
+            poses: true,
+            ..
+        } => {
+            let bytes = read_clip(&clip)?;
+            let c = parse_clip(&clip, &bytes)?;
+            let p = mocap_encoder::play::pose_frames(&c)?;
+            let dest = dest.write(&p.frames, |i| std::time::Duration::from_micros(p.due_us(i)))?;
+            eprintln!(
+                "{}: {} poses at {} Hz, {} frames, {} bytes",
+                dest.display(),
+                p.frames.len() - 2,
+                f64::from(p.rate_mhz) / 1000.0,
+                p.frames.len(),
+                p.frames.iter().map(Vec::len).sum::<usize>()
+            );
+            Ok(())
+        }
+        Command::Send {
+            clip,
+            dest,
             baud,
             looped,
+            poses: false,
         } => {
             let bytes = read_clip(&clip)?;
             parse_clip(&clip, &bytes)?;

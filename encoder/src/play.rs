@@ -5,7 +5,8 @@
 //! paced in real time unless `--fast`.
 
 use mocap_decoder::{tick_count, tick_us, Clip, RigServo};
-use mocap_servo::{maestro, ssc32, stream, Limiter, Message, ServoLimits};
+use mocap_servo::output::{MaestroOutput, ServoOutput, Ssc32Output};
+use mocap_servo::{stream, Limiter, Message, ServoLimits};
 
 use crate::rig::{Rig, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
@@ -21,7 +22,7 @@ pub enum Protocol {
 }
 
 /// Most servos a rig may drive here.
-pub const MAX_SERVOS: usize = 64;
+pub const MAX_SERVOS: usize = mocap_servo::output::MAX_SERVOS;
 /// Upper bound on the ticks of the return to neutral.
 const MAX_STOP_TICKS: usize = 100_000;
 
@@ -70,29 +71,53 @@ fn sample_ticks(clip: &Clip<'_>, rate_mhz: u32) -> Result<(usize, Vec<i32>), Str
     Ok((count as usize, samples))
 }
 
-/// Plays a servo clip (one with a rig table, SPEC.md §3.5) at its rig's
-/// rate or `rate_hz`: each channel's decoded angle becomes its servo's
-/// pulse through `RigServo::pulse_qus` — the firmware's own integer
-/// mapping — then [`drive`].
-pub fn servo_clip_stream(
-    clip: &Clip<'_>,
-    protocol: Protocol,
-    rate_hz: Option<f64>,
-) -> Result<ServoStream, String> {
+/// A servo clip's pulse targets at every servo tick, before any limiter:
+/// each channel's decoded angle (`sample_at` at the integer tick times)
+/// through its servo's `RigServo::pulse_qus`, the firmware's own mapping.
+#[derive(Clone, Debug)]
+pub struct ClipTargets {
+    /// The rig table's servos.
+    pub servos: Vec<RigServo>,
+    /// Servo rate, millihertz.
+    pub rate_mhz: u32,
+    /// One pulse per servo (rig order) per tick, ¼ µs.
+    pub targets: Vec<Vec<u16>>,
+}
+
+/// The targets of a servo clip (one with a rig table, SPEC.md §3.5) at its
+/// rig's rate or `rate_hz`.
+pub fn servo_clip_targets(clip: &Clip<'_>, rate_hz: Option<f64>) -> Result<ClipTargets, String> {
     let rig = clip.rig().ok_or("not a servo clip: give --rig")?;
     let servos: Vec<RigServo> = rig.servos().collect();
     let rate_mhz = rate_mhz(rate_hz, rig.rate_mhz())?;
     let (count, samples) = sample_ticks(clip, rate_mhz)?;
     let n = clip.header().channel_count().max(1);
-    let targets = (0..count).map(|i| {
-        let pose = &samples[i * n..(i + 1) * n];
-        servos
-            .iter()
-            .zip(pose)
-            .map(|(s, &v)| s.pulse_qus(v))
-            .collect()
-    });
-    drive(targets, &servos, rate_mhz, protocol, None)
+    let targets = (0..count)
+        .map(|i| {
+            let pose = &samples[i * n..(i + 1) * n];
+            servos
+                .iter()
+                .zip(pose)
+                .map(|(s, &v)| s.pulse_qus(v))
+                .collect()
+        })
+        .collect();
+    Ok(ClipTargets {
+        servos,
+        rate_mhz,
+        targets,
+    })
+}
+
+/// Plays a servo clip at its rig's rate or `rate_hz`: [`servo_clip_targets`],
+/// then [`drive`].
+pub fn servo_clip_stream(
+    clip: &Clip<'_>,
+    protocol: Protocol,
+    rate_hz: Option<f64>,
+) -> Result<ServoStream, String> {
+    let t = servo_clip_targets(clip, rate_hz)?;
+    drive(t.targets, &t.servos, t.rate_mhz, protocol, None)
 }
 
 /// Samples a motion clip at the rig's rate (or `rate_hz`), maps it through
@@ -180,74 +205,93 @@ fn drive(
     })
 }
 
-/// One tick's command bytes for `pulses` (¼ µs) on `outputs`.
+/// One tick's command bytes for `pulses` (¼ µs) on `outputs`, through the
+/// same `mocap_servo::output` code the firmware's playback loop drives.
 fn command(
     protocol: Protocol,
     outputs: &[u16],
     pulses: &[u16],
     time_ms: u16,
 ) -> Result<Vec<u8>, String> {
-    match protocol {
-        Protocol::Maestro => {
-            let mut out = vec![0u8; outputs.len() * maestro::SET_TARGET_LEN];
-            for (i, (&o, &p)) in outputs.iter().zip(pulses).enumerate() {
-                let ch =
-                    u8::try_from(o).map_err(|_| format!("output {o} is not a Maestro channel"))?;
-                let at = i * maestro::SET_TARGET_LEN;
-                maestro::set_target(ch, p, &mut out[at..])
-                    .map_err(|e| format!("output {o}: {e}"))?;
-            }
-            Ok(out)
-        }
-        Protocol::Ssc32 => {
-            // One group move over consecutive outputs.
-            let mut order: Vec<(u16, u16)> = outputs
-                .iter()
-                .copied()
-                .zip(pulses.iter().copied())
-                .collect();
-            order.sort_unstable();
-            let first = order.first().map_or(0, |&(o, _)| o);
-            if order
-                .iter()
-                .enumerate()
-                .any(|(i, &(o, _))| usize::from(o) != usize::from(first) + i)
-            {
-                return Err("ssc32: the rig's outputs must be consecutive channels".into());
-            }
-            let first = u8::try_from(first)
-                .map_err(|_| format!("output {first} is not an SSC-32 channel"))?;
-            let ordered: Vec<u16> = order.iter().map(|&(_, p)| p).collect();
-            let mut out = vec![0u8; ssc32::group_move_max_len(ordered.len())];
-            let len =
-                ssc32::group_move(first, &ordered, time_ms, &mut out).map_err(|e| e.to_string())?;
-            out.truncate(len);
-            Ok(out)
-        }
-    }
+    let mut bytes = Vec::new();
+    let written = match protocol {
+        Protocol::Maestro => MaestroOutput::new(&mut bytes, outputs)
+            .map_err(|e| format!("maestro: {e}"))?
+            .write(pulses),
+        Protocol::Ssc32 => Ssc32Output::new(&mut bytes, outputs, time_ms)
+            .map_err(|e| format!("ssc32: {e}"))?
+            .write(pulses),
+    };
+    written.map_err(|e| e.to_string())?;
+    Ok(bytes)
 }
 
-/// The frames `mocap send` writes: `Hello`, the clip in chunks of at most
-/// [`stream::MAX_CHUNK_LEN`] bytes, then `Play` (SPEC.md §8).
+/// One frame (delimiter included) of `message`.
+fn frame(message: &Message<'_>) -> Result<Vec<u8>, String> {
+    let mut buf = [0u8; stream::MAX_FRAME_LEN];
+    let len = stream::encode_frame(message, &mut buf).map_err(|e| e.to_string())?;
+    Ok(buf[..len].to_vec())
+}
+
+/// The first frame of a session: a lone `00`, which ends whatever the
+/// receiver holds (line noise, a frame cut short), then `Hello`.
+fn hello() -> Result<Vec<u8>, String> {
+    let mut bytes = vec![stream::DELIMITER];
+    bytes.extend(frame(&Message::Hello {
+        version: stream::PROTOCOL_VERSION,
+    })?);
+    Ok(bytes)
+}
+
+/// The frames `mocap send` writes: `00` and `Hello`, the clip in chunks of
+/// at most [`stream::MAX_CHUNK_LEN`] bytes, then `Play` (SPEC.md §8).
 pub fn clip_frames(clip: &[u8], looped: bool) -> Result<Vec<Vec<u8>>, String> {
     let total = u32::try_from(clip.len()).map_err(|_| "clip larger than 4 GB".to_string())?;
-    let mut frames = Vec::new();
-    let mut push = |m: &Message<'_>| -> Result<(), String> {
-        let mut buf = [0u8; stream::MAX_FRAME_LEN];
-        let len = stream::encode_frame(m, &mut buf).map_err(|e| e.to_string())?;
-        frames.push(buf[..len].to_vec());
-        Ok(())
-    };
-    push(&Message::Hello {
-        version: stream::PROTOCOL_VERSION,
-    })?;
+    let mut frames = vec![hello()?];
     for (i, chunk) in clip.chunks(stream::MAX_CHUNK_LEN).enumerate() {
-        push(&Message::ClipChunk {
+        frames.push(frame(&Message::ClipChunk {
             offset: (i * stream::MAX_CHUNK_LEN) as u32,
             total,
             bytes: chunk,
-        })?;
+        })?);
     }
-    push(&Message::Play { loop_: looped })?;
+    frames.push(frame(&Message::Play { loop_: looped })?);
     Ok(frames)
+}
+
+/// What `mocap send --poses` writes: `00` and `Hello`, one `Pose` per servo
+/// tick of a servo clip at its rig's rate — `seq` = the tick's number
+/// (wrapping), `pulses` = [`servo_clip_targets`], which the firmware's
+/// limiter holds to the rig's limits — then `Stop` (SPEC.md §8).
+#[derive(Clone, Debug)]
+pub struct PoseStream {
+    /// Servo rate, millihertz: `Pose` `i` is due at `tick_us(i, rate_mhz)`.
+    pub rate_mhz: u32,
+    /// `00 Hello`, the poses, `Stop`.
+    pub frames: Vec<Vec<u8>>,
+}
+
+impl PoseStream {
+    /// When frame `i` is due, µs after the start: `Hello` at 0, `Pose`
+    /// `k` at tick `k`, `Stop` one tick after the last pose.
+    pub fn due_us(&self, i: usize) -> u64 {
+        let ticks = self.frames.len().saturating_sub(2) as u64;
+        tick_us((i as u64).saturating_sub(1).min(ticks), self.rate_mhz)
+    }
+}
+
+/// The frames of `mocap send --poses` for a servo clip.
+pub fn pose_frames(clip: &Clip<'_>) -> Result<PoseStream, String> {
+    let t = servo_clip_targets(clip, None)
+        .map_err(|_| "--poses needs a servo clip (mocap encode --rig)".to_string())?;
+    let mut frames = vec![hello()?];
+    for (i, pulses) in t.targets.iter().enumerate() {
+        let pose = Message::pose(i as u16, pulses).map_err(|e| e.to_string())?;
+        frames.push(frame(&pose)?);
+    }
+    frames.push(frame(&Message::Stop)?);
+    Ok(PoseStream {
+        rate_mhz: t.rate_mhz,
+        frames,
+    })
 }

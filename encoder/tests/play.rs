@@ -260,3 +260,66 @@ fn send_frames_reassemble_the_clip() {
     assert_eq!(chunks, bytes.len().div_ceil(64));
     assert_eq!(clip, bytes);
 }
+
+#[test]
+fn send_starts_with_a_flushing_delimiter() {
+    let (bytes, _) = demo();
+    let frames = clip_frames(&bytes, false).unwrap();
+    assert_eq!(
+        frames[0][0], 0x00,
+        "a lone 00 ends whatever the receiver holds"
+    );
+    // Whatever noise came before, the Hello after it is received.
+    let mut rx = FrameReceiver::<{ mocap_servo::stream::MAX_FRAME_LEN }>::new();
+    let noise = [0x13u8, 0x37, 0xFF];
+    let mut first = None;
+    for &b in noise.iter().chain(frames[0].iter()) {
+        if let Some(Ok(m)) = rx.push(b) {
+            first.get_or_insert(format!("{m:?}"));
+        }
+    }
+    assert_eq!(first.as_deref(), Some("Hello { version: 1 }"));
+}
+
+#[test]
+fn send_poses_sends_every_tick_of_the_servo_clip_then_stop() {
+    use mocap_encoder::play::{pose_frames, servo_clip_targets};
+    let (bytes, _, _) = servo_clip_bytes(CodecChoice::PcaSpline, 1.0);
+    let clip = Clip::parse(&bytes).unwrap();
+    let p = pose_frames(&clip).unwrap();
+    let t = servo_clip_targets(&clip, None).unwrap();
+    assert_eq!(p.rate_mhz, 50_000);
+    assert_eq!(p.frames.len(), t.targets.len() + 2);
+    let mut rx = FrameReceiver::<{ mocap_servo::stream::MAX_FRAME_LEN }>::new();
+    let mut messages = Vec::new();
+    for &b in p.frames.concat().iter() {
+        match rx.push(b) {
+            Some(Ok(m)) => messages.push(format!("{m:?}")),
+            Some(Err(e)) => panic!("{e}"),
+            None => {}
+        }
+    }
+    assert_eq!(
+        messages.first().map(String::as_str),
+        Some("Hello { version: 1 }")
+    );
+    assert_eq!(messages.last().map(String::as_str), Some("Stop"));
+    for (i, (m, pulses)) in messages[1..messages.len() - 1]
+        .iter()
+        .zip(&t.targets)
+        .enumerate()
+    {
+        assert_eq!(m, &format!("Pose {{ seq: {i}, pulses: {pulses:?} }}"));
+    }
+    // Paced at the rig's rate: pose k at tick k, Stop one tick after the last.
+    assert_eq!(p.due_us(0), 0);
+    assert_eq!(p.due_us(1), 0);
+    assert_eq!(p.due_us(2), 20_000);
+    assert_eq!(
+        p.due_us(p.frames.len() - 1),
+        t.targets.len() as u64 * 20_000
+    );
+    // A motion clip has no rig table to take pulses from.
+    let (motion, _) = demo();
+    assert!(pose_frames(&Clip::parse(&motion).unwrap()).is_err());
+}

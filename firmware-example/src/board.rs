@@ -1,8 +1,12 @@
-//! The one thing the example needs from each board: a transmit-only UART at 115200 8N1.
+//! What the example needs from each board: its UART at 115200 8N1 — transmit for the text
+//! output, receive (non-blocking, [`Rx::read_byte`]) for the streaming mode — and how much
+//! RAM the streaming mode may give a received clip ([`CLIP_BUFFER_BYTES`]).
 //!
 //! Raw register access on purpose: no PAC/HAL per board, so the three boards share one
 //! dependency set and the flash figures show the decoder, not a HAL. QEMU ignores the baud
-//! rate; the values are the real boards' so the same binary also talks on hardware.
+//! rate; the values are the real boards' so the same binary also talks on hardware. QEMU
+//! feeds the receiver from the `-serial` chardev only while the UART has room (PL011: its
+//! 16-byte FIFO; nRF51: 6 bytes; CMSDK: one byte), so input from a file is never lost.
 
 use core::ptr::{read_volatile, write_volatile};
 
@@ -24,6 +28,21 @@ pub trait Write {
     fn write_byte(&mut self, byte: u8);
 }
 
+/// The receive side of the board's UART (set up by `Uart::init`).
+pub struct Rx(());
+
+impl Rx {
+    /// The receiver; call after `Uart::init`.
+    pub fn take() -> Self {
+        Rx(())
+    }
+
+    /// The next received byte, if one is waiting.
+    pub fn read_byte(&mut self) -> Option<u8> {
+        imp::read_byte()
+    }
+}
+
 #[cfg(feature = "board-lm3s6965")]
 mod imp {
     //! TI Stellaris LM3S6965 UART0 (an ARM PL011) on PA0/PA1.
@@ -43,6 +62,19 @@ mod imp {
     const LCRH: usize = UART0 + 0x2C;
     const CR: usize = UART0 + 0x30;
     const FR_TXFF: u32 = 1 << 5; // transmit FIFO full
+    const FR_RXFE: u32 = 1 << 4; // receive FIFO empty
+
+    /// 64 KB of RAM: 32 KB for a streamed clip.
+    pub const CLIP_BUFFER_BYTES: usize = 32 * 1024;
+
+    pub fn read_byte() -> Option<u8> {
+        if read_reg(FR) & FR_RXFE != 0 {
+            return None;
+        }
+        // Bits 8–11 are the byte's framing/parity/break/overrun flags: a damaged byte is
+        // still passed on, and the frame's CRC rejects it.
+        Some(read_reg(DR) as u8)
+    }
 
     pub struct Uart(());
 
@@ -83,9 +115,25 @@ mod imp {
 
     pub const NAME: &str = "microbit";
 
+    /// 16 KB of RAM: 6 KB for a streamed clip (the rest is the stack, about 6 KB).
+    pub const CLIP_BUFFER_BYTES: usize = 6 * 1024;
+
+    pub fn read_byte() -> Option<u8> {
+        if read_reg(EVENTS_RXDRDY) == 0 {
+            return None;
+        }
+        // Clear the event before reading RXD: reading it moves the next byte in and raises
+        // the event again.
+        write_reg(EVENTS_RXDRDY, 0);
+        Some(read_reg(RXD) as u8)
+    }
+
     const UART0: usize = 0x4000_2000;
+    const TASKS_STARTRX: usize = UART0 + 0x000;
     const TASKS_STARTTX: usize = UART0 + 0x008;
+    const EVENTS_RXDRDY: usize = UART0 + 0x108;
     const EVENTS_TXDRDY: usize = UART0 + 0x11C;
+    const RXD: usize = UART0 + 0x518;
     const ENABLE: usize = UART0 + 0x500;
     const PSELTXD: usize = UART0 + 0x50C;
     const PSELRXD: usize = UART0 + 0x514;
@@ -101,6 +149,7 @@ mod imp {
             write_reg(BAUDRATE, 0x01D7_E000); // 115200
             write_reg(ENABLE, 4);
             write_reg(TASKS_STARTTX, 1);
+            write_reg(TASKS_STARTRX, 1);
             Uart(())
         }
 
@@ -132,14 +181,26 @@ mod imp {
     const CTRL: usize = UART0 + 0x8;
     const BAUDDIV: usize = UART0 + 0x10;
     const STATE_TX_FULL: u32 = 1;
+    const STATE_RX_FULL: u32 = 1 << 1;
     const CTRL_TX_EN: u32 = 1;
+    const CTRL_RX_EN: u32 = 1 << 1;
+
+    /// 4 MB of RAM: 64 KB for a streamed clip.
+    pub const CLIP_BUFFER_BYTES: usize = 64 * 1024;
+
+    pub fn read_byte() -> Option<u8> {
+        if read_reg(STATE) & STATE_RX_FULL == 0 {
+            return None;
+        }
+        Some(read_reg(DATA) as u8)
+    }
 
     pub struct Uart(());
 
     impl Uart {
         pub fn init() -> Self {
             write_reg(BAUDDIV, 25_000_000 / 115_200); // 25 MHz peripheral clock
-            write_reg(CTRL, CTRL_TX_EN);
+            write_reg(CTRL, CTRL_TX_EN | CTRL_RX_EN);
             Uart(())
         }
 
@@ -164,4 +225,4 @@ mod imp {
 )))]
 compile_error!("enable one board feature: board-lm3s6965, board-microbit or board-mps2-an386");
 
-pub use imp::{Uart, NAME};
+pub use imp::{Uart, CLIP_BUFFER_BYTES, NAME};

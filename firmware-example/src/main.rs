@@ -1,7 +1,9 @@
 //! mocap-firmware: plays the `.mcb` clip embedded in flash and prints every decoded frame on
 //! the board's UART, then decode statistics, then exits through semihosting (QEMU's exit code).
 //! Built with `MOCAP_SAMPLE_US=P`, it prints `Player::sample_at` at t = 0, P, 2P, … instead
-//! (up to and including the first t past the clip's duration).
+//! (up to and including the first t past the clip's duration). Built with `MOCAP_SERVO`, it
+//! plays a servo clip through a servo output (`servo.rs`); with `MOCAP_STREAM=1`, it takes
+//! clips and live poses from its UART (`stream.rs`).
 //!
 //! Output format: see README.md. Lines starting with `#` are metadata; every other line is
 //! one frame (or sample) and must be byte-identical to the host decoder's output for the clip.
@@ -10,6 +12,7 @@
 
 mod board;
 mod servo;
+mod stream;
 mod text;
 
 use core::mem::size_of;
@@ -32,7 +35,7 @@ static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
 mod config {
     include!(concat!(env!("OUT_DIR"), "/config.rs"));
 }
-use config::{SAMPLE_US, SERVO};
+use config::{SAMPLE_US, SERVO, STREAM};
 
 /// Whether this build samples with `sample_at` (else it plays every frame with `next_frame`).
 const SAMPLING: bool = SAMPLE_US != 0;
@@ -45,12 +48,12 @@ mod decoder_glue {
     use super::{Clip, Error, Player, MAX_CHANNELS};
 
     #[inline(never)]
-    pub fn parse(bytes: &'static [u8]) -> Result<Clip<'static>, Error> {
+    pub fn parse(bytes: &[u8]) -> Result<Clip<'_>, Error> {
         Clip::parse(bytes)
     }
 
     #[inline(never)]
-    pub fn new_player(clip: &Clip<'static>) -> Result<Player<'static, MAX_CHANNELS>, Error> {
+    pub fn new_player<'c, const N: usize>(clip: &Clip<'c>) -> Result<Player<'c, N>, Error> {
         Player::new(clip)
     }
 
@@ -63,10 +66,10 @@ mod decoder_glue {
     }
 
     #[inline(never)]
-    pub fn sample_at(
-        player: &mut Player<'static, MAX_CHANNELS>,
+    pub fn sample_at<const N: usize>(
+        player: &mut Player<'_, N>,
         t_us: u64,
-        out: &mut [i32; MAX_CHANNELS],
+        out: &mut [i32; N],
     ) -> Result<(), Error> {
         player.sample_at(t_us, out)
     }
@@ -191,6 +194,7 @@ mod stack {
 enum Failure {
     Decoder(&'static str, Error),
     Servo(&'static str),
+    ServoCrate(&'static str, mocap_servo::Error),
     FrameIndex { expected: u32, got: u32 },
     FrameCount { header: u32, decoded: u32 },
     SampleCount { expected: u32, got: u32 },
@@ -320,6 +324,12 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     let clip = decoder_glue::parse(CLIP).map_err(|e| Failure::Decoder("parse", e))?;
     let parse_ticks = ticks::since(t0, ticks::now());
 
+    if STREAM {
+        // The embedded servo clip gives the rig (servos, limits, rate); the motion comes over
+        // the UART.
+        let rig = servo::Rig::from_clip(&clip)?;
+        return servo::drive(rig, stream::Stream { calibration_ticks }, text);
+    }
     if SERVO != 0 {
         return servo::run(&clip, calibration_ticks, text);
     }
@@ -341,7 +351,8 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     }
 
     let t0 = ticks::now();
-    let player = decoder_glue::new_player(&clip).map_err(|e| Failure::Decoder("player", e))?;
+    let player = decoder_glue::new_player::<MAX_CHANNELS>(&clip)
+        .map_err(|e| Failure::Decoder("player", e))?;
     let new_ticks = ticks::since(t0, ticks::now());
     drop(player);
 
@@ -429,6 +440,11 @@ fn report(text: &mut Out, failure: &Failure) {
         }
         Failure::Servo(what) => {
             text.str("# error servo: ").str(what).nl();
+        }
+        Failure::ServoCrate(what, error) => {
+            text.str("# error servo ").str(what).str(": ");
+            let _ = core::fmt::write(&mut FmtAdapter(text), format_args!("{error}"));
+            text.nl();
         }
         Failure::FrameIndex { expected, got } => {
             text.str("# error frame_index")

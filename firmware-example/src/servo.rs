@@ -1,206 +1,458 @@
-//! Servo mode (`MOCAP_SERVO=maestro` or `ssc32`): plays a servo clip (one with a rig table, SPEC.md §3.5)
-//! the way an animatronic controller does — a fixed-rate tick at the rig's rate, `sample_at`,
-//! the rig's integer angle-to-pulse mapping, `mocap_servo::Limiter` (pulse range and speed),
-//! then the Pololu Maestro Set Target bytes of every servo or one SSC-32 group move — and
-//! finally brings every servo back to neutral at its speed limit. Each tick is printed as one
-//! line — Maestro bytes as hex (`m 84 00 70 2e …`), SSC-32 as its text without the `\r`
-//! (`s #0P1500#1P1625T20`) — which the host's `mocap play … --protocol maestro|ssc32` must
-//! reproduce byte for byte. Only the tick's work is timed, not the printing.
+//! Servo playback: the rig of a servo clip (SPEC.md §3.5), its `Limiter`, and one playback
+//! loop that writes every tick's limited pulses through `mocap_servo::output::ServoOutput`,
+//! whichever output the build selects (`MOCAP_SERVO`):
+//!
+//! | `MOCAP_SERVO` | output | device in this build (QEMU) | line per tick |
+//! |---|---|---|---|
+//! | `maestro` | `MaestroOutput` (Set Target per servo) | UART bytes, recorded | `m 84 00 70 2e …` (hex) |
+//! | `ssc32` | `Ssc32Output` (one group move) | UART bytes, recorded | `s #0P1500#1P1625…T20` (no `\r`) |
+//! | `pwm` | `PwmOutput` over a `ServoBank` of 16 `SetDutyCycle` channels | `DutyRecorder`s | `p <duty ch0> … <duty ch15>` |
+//! | `pca9685` | `Pca9685Output` (pwm-pca9685, 50 Hz) | I²C bus, recorded | `i @40 06 00 00 33 01 @40 …` |
+//!
+//! QEMU's boards have no observable PWM or PCA9685 and one UART (the console), so the build
+//! hands each output a recorder from `mocap_servo::record` and prints what it recorded after
+//! each tick; on hardware the same output takes the board's UART, timer channels or I²C bus.
+//! The host (`tests/tests/qemu_parity.rs`) drives the same outputs with the same recorders
+//! from `mocap play`'s pulses and must read the same lines. Only a tick's work is timed
+//! (pose, pulses, limiter, output write), not the printing.
+//!
+//! Modes: [`FlashClip`] plays the clip embedded in flash (`MOCAP_SERVO` alone); the streaming
+//! mode (`MOCAP_STREAM`, `src/stream.rs`) drives the same [`Driver`] from UART frames.
 
 use mocap_decoder::{tick_count, tick_us, Clip, Player, RigServo};
-use mocap_servo::{maestro, ssc32, Limiter, ServoLimits};
+use mocap_servo::output::{MaestroOutput, Pca9685Output, PwmOutput, ServoOutput, Ssc32Output};
+use mocap_servo::pca9685::{self, Address, Pca9685Servos};
+use mocap_servo::record::{DutyRecorder, I2cRecorder, SerialRecorder};
+use mocap_servo::{ssc32, Limiter, OutputError, ServoBank, ServoLimits};
 
 use crate::config::SERVO;
-use crate::{decoder_glue, instructions, ticks, Failure, Out, MAX_CHANNELS};
+use crate::{decoder_glue, instructions, ticks, Failure, Out};
 
-/// Bytes of one tick's commands (SSC-32 text is the longer).
+/// Most servos of a rig in this firmware (as many as a streamed `Pose` carries).
+pub const MAX_SERVOS: usize = mocap_servo::stream::MAX_POSE_SERVOS;
+/// Words of the servo player's state: at least one per servo; more let `pca-spline` keep its
+/// key-interval cache (SPEC.md §6), which a tick would otherwise recompute.
+pub const PLAYER_WORDS: usize = 128;
+/// The player of servo clips.
+pub type ServoPlayer<'c> = Player<'c, PLAYER_WORDS>;
+
+/// Outputs (`MOCAP_SERVO`, build.rs); 1 (and 0 in the streaming mode) is the Maestro.
+const SSC32: u8 = 2;
+const PWM: u8 = 3;
+const PCA9685: u8 = 4;
+
+/// The simulated PWM peripheral: 16 channels of a 16-bit timer whose period is the 20 ms
+/// servo frame (`ServoBank::new`, 50 Hz), so duty = round(pulse · 65535 / 20 000 µs).
+const PWM_CHANNELS: usize = 16;
+const PWM_MAX_DUTY: u16 = u16::MAX;
+/// The PCA9685's I²C address (all address pins low).
+const PCA9685_ADDRESS: u8 = 0x40;
+/// Serial bytes of one tick (SSC-32 text is the longer).
 const TICK_BYTES: usize = ssc32::group_move_max_len(MAX_SERVOS);
-
-/// Most servos of a rig in this firmware.
-pub const MAX_SERVOS: usize = 32;
-/// Bound on the ticks of the return to neutral.
+/// I²C record of one tick: 2 + 5 bytes per servo and the driver's MODE1 write.
+const I2C_RECORD_BYTES: usize = 7 * MAX_SERVOS + 8;
+/// Bound on the ticks of a return to neutral.
 const MAX_STOP_TICKS: u32 = 100_000;
 
-/// Everything one tick needs.
-struct Rig {
+/// The servos of a rig and the limiter that holds every pulse to their limits.
+pub struct Rig {
     servos: [RigServo; MAX_SERVOS],
     count: usize,
     limiter: Limiter<MAX_SERVOS>,
     rate_mhz: u32,
 }
 
-pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Result<(), Failure> {
-    let table = clip
-        .rig()
-        .ok_or(Failure::Servo("the clip has no rig table"))?;
-    let rate_mhz = table.rate_mhz();
-    let idle = RigServo {
-        output: 0,
-        angle_lo_mdeg: 0,
-        angle_hi_mdeg: 1,
-        pulse_lo_qus: 6000,
-        pulse_hi_qus: 6000,
-        neutral_qus: 6000,
-        max_speed_mdeg_s: 0,
-    };
-    let mut servos = [idle; MAX_SERVOS];
-    let mut count = 0;
-    for (slot, s) in servos.iter_mut().zip(table.servos()) {
-        *slot = s;
-        count += 1;
+impl Rig {
+    /// The rig table of a servo clip, with its limits; the limiter starts at neutral.
+    pub fn from_clip(clip: &Clip<'_>) -> Result<Self, Failure> {
+        let table = clip
+            .rig()
+            .ok_or(Failure::Servo("the clip has no rig table"))?;
+        if table.servo_count() > MAX_SERVOS {
+            return Err(Failure::Servo("more servos than MAX_SERVOS"));
+        }
+        let rate_mhz = table.rate_mhz();
+        let idle = RigServo {
+            output: 0,
+            angle_lo_mdeg: 0,
+            angle_hi_mdeg: 1,
+            pulse_lo_qus: 6000,
+            pulse_hi_qus: 6000,
+            neutral_qus: 6000,
+            max_speed_mdeg_s: 0,
+        };
+        let mut servos = [idle; MAX_SERVOS];
+        let mut count = 0;
+        for (slot, s) in servos.iter_mut().zip(table.servos()) {
+            *slot = s;
+            count += 1;
+        }
+        let mut limits = [ServoLimits {
+            min_qus: 6000,
+            max_qus: 6000,
+            neutral_qus: 6000,
+            max_step_qus: 0,
+        }; MAX_SERVOS];
+        for (l, s) in limits.iter_mut().zip(&servos).take(count) {
+            let (lo, hi) = s.pulse_range_qus();
+            *l = ServoLimits::new(lo, hi, s.neutral_qus, s.max_step_qus(rate_mhz))
+                .map_err(|e| Failure::ServoCrate("limits", e))?;
+        }
+        let limiter = Limiter::new(limits).map_err(|e| Failure::ServoCrate("limits", e))?;
+        Ok(Rig {
+            servos,
+            count,
+            limiter,
+            rate_mhz,
+        })
     }
-    if table.servo_count() > MAX_SERVOS {
-        return Err(Failure::Servo("more servos than MAX_SERVOS"));
-    }
-    let mut limits = [ServoLimits {
-        min_qus: 6000,
-        max_qus: 6000,
-        neutral_qus: 6000,
-        max_step_qus: 0,
-    }; MAX_SERVOS];
-    for (l, s) in limits.iter_mut().zip(&servos).take(count) {
-        let (lo, hi) = s.pulse_range_qus();
-        *l = ServoLimits::new(lo, hi, s.neutral_qus, s.max_step_qus(rate_mhz))
-            .map_err(|_| Failure::Servo("invalid limits"))?;
-    }
-    let limiter = Limiter::new(limits).map_err(|_| Failure::Servo("invalid limits"))?;
-    let mut rig = Rig {
-        servos,
-        count,
-        limiter,
-        rate_mhz,
-    };
-    let mut player = decoder_glue::new_player(clip).map_err(|e| Failure::Decoder("player", e))?;
-    let duration_us = clip.header().duration_us();
-    let n_ticks = tick_count(duration_us, rate_mhz);
-    text.str("# mode=servo protocol=")
-        .str(if SERVO == 2 { "ssc32" } else { "maestro" })
-        .kv("servos", count as u64)
-        .kv("rate_mhz", u64::from(rate_mhz))
-        .kv("ticks", n_ticks)
-        .nl();
 
-    let mut out = [0i32; MAX_CHANNELS];
-    let mut held = [0u16; MAX_SERVOS];
-    let mut bytes = [0u8; TICK_BYTES];
-    let (mut total, mut worst) = (0u64, 0u32);
-    for i in 0..n_ticks {
-        let start = ticks::now();
-        let len = tick(
-            &mut rig,
-            &mut player,
-            tick_us(i, rate_mhz),
-            &mut out,
-            &mut held,
-            &mut bytes,
-        )?;
-        let spent = ticks::since(start, ticks::now());
-        total += u64::from(spent);
-        worst = worst.max(spent);
-        print_tick(text, bytes.get(..len).unwrap_or(&[]));
+    pub fn count(&self) -> usize {
+        self.count
     }
-    for _ in 0..MAX_STOP_TICKS {
-        let done = rig
+
+    pub fn rate_mhz(&self) -> u32 {
+        self.rate_mhz
+    }
+
+    /// Whether `clip`'s rig table is this rig (rate and every servo).
+    pub fn matches(&self, clip: &Clip<'_>) -> bool {
+        clip.rig().is_some_and(|table| {
+            table.rate_mhz() == self.rate_mhz
+                && table.servo_count() == self.count
+                && table.servos().zip(&self.servos).all(|(a, b)| a == *b)
+        })
+    }
+
+    /// Every servo's controller channel, rig order (only the first `count` are servos).
+    fn outputs(&self) -> [u16; MAX_SERVOS] {
+        let mut outputs = [0u16; MAX_SERVOS];
+        for (o, s) in outputs.iter_mut().zip(&self.servos) {
+            *o = s.output;
+        }
+        outputs
+    }
+
+    /// Pulses for decoded angles (one per servo) through the rig's integer mapping.
+    fn targets(&self, angles: &[i32]) -> [u16; MAX_SERVOS] {
+        let mut targets = [6000u16; MAX_SERVOS];
+        for ((t, s), &a) in targets
+            .iter_mut()
+            .zip(&self.servos)
+            .zip(angles)
+            .take(self.count)
+        {
+            *t = s.pulse_qus(a);
+        }
+        targets
+    }
+}
+
+/// Instruction figures of the timed ticks.
+#[derive(Default)]
+pub struct TickStats {
+    pub ticks: u64,
+    pub total_ticks: u64,
+    pub worst_ticks: u32,
+    /// The part spent in `ServoOutput::write`.
+    pub output_ticks: u64,
+}
+
+/// One playback loop's state: the rig's limiter, the output, and what prints a tick's line.
+pub struct Driver<O, S> {
+    pub rig: Rig,
+    output: O,
+    show: S,
+    held: [u16; MAX_SERVOS],
+    pub stats: TickStats,
+}
+
+impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
+    fn new(rig: Rig, output: O, show: S) -> Self {
+        let held = *rig.limiter.last();
+        Driver {
+            rig,
+            output,
+            show,
+            held,
+            stats: TickStats::default(),
+        }
+    }
+
+    /// One tick towards `targets` (¼ µs, rig order): the limiter, then the output. The tick's
+    /// time counts from `start` (SysTick read by the caller before its own work), the
+    /// printing of its line does not.
+    pub fn command(
+        &mut self,
+        targets: &[u16; MAX_SERVOS],
+        start: u32,
+        text: &mut Out,
+    ) -> Result<(), Failure> {
+        self.rig
             .limiter
-            .stop_step(&mut held)
-            .map_err(|_| Failure::Servo("stop"))?;
-        let len = encode(&rig, &held, &mut bytes)?;
-        print_tick(text, bytes.get(..len).unwrap_or(&[]));
-        if done {
-            break;
+            .apply(targets, &mut self.held)
+            .map_err(|e| Failure::ServoCrate("limiter", e))?;
+        let before_output = ticks::now();
+        self.send()?;
+        let end = ticks::now();
+        let spent = ticks::since(start, end);
+        self.stats.output_ticks += u64::from(ticks::since(before_output, end));
+        self.stats.ticks += 1;
+        self.stats.total_ticks += u64::from(spent);
+        self.stats.worst_ticks = self.stats.worst_ticks.max(spent);
+        (self.show)(text)
+    }
+
+    /// One tick of the clip at `t_us`: `sample_at` (into `angles`, the caller's scratch),
+    /// the rig's pulse mapping, [`command`].
+    pub fn clip_tick(
+        &mut self,
+        player: &mut ServoPlayer<'_>,
+        t_us: u64,
+        angles: &mut [i32; PLAYER_WORDS],
+        text: &mut Out,
+    ) -> Result<(), Failure> {
+        let start = ticks::now();
+        decoder_glue::sample_at(player, t_us, angles).map_err(|e| Failure::Decoder("sample", e))?;
+        let targets = self.rig.targets(angles);
+        self.command(&targets, start, text)
+    }
+
+    /// One tick towards neutral at the speed limits; `true` once every servo is there.
+    pub fn stop_tick(&mut self, text: &mut Out) -> Result<bool, Failure> {
+        let parked = self
+            .rig
+            .limiter
+            .stop_step(&mut self.held)
+            .map_err(|e| Failure::ServoCrate("stop", e))?;
+        self.send()?;
+        (self.show)(text)?;
+        Ok(parked)
+    }
+
+    /// Returns every servo to neutral at its speed limit (nothing when already there).
+    pub fn park(&mut self, text: &mut Out) -> Result<(), Failure> {
+        if self.parked() {
+            return Ok(());
         }
+        for _ in 0..MAX_STOP_TICKS {
+            if self.stop_tick(text)? {
+                return Ok(());
+            }
+        }
+        Err(Failure::Servo("return to neutral did not finish"))
     }
-    let cal = calibration_ticks;
-    let per_tick = instructions(total, cal) / n_ticks.max(1);
-    text.str("#")
-        .kv("servo_ticks", n_ticks)
-        .kv("per_tick", per_tick)
-        .kv("max_tick", instructions(u64::from(worst), cal))
-        // Share of a 48 MHz core at one instruction per cycle, in 1/100 %.
-        .kv(
-            "cpu_x10000_at_48mhz",
-            per_tick * u64::from(rate_mhz) / 1000 * 10_000 / 48_000_000,
-        )
-        .nl();
-    text.str("#")
-        .kv("stack_bytes_used", crate::stack::used_bytes() as u64)
-        .nl();
-    Ok(())
-}
 
-/// One servo tick: pose at `t_us`, pulses, limits, command bytes; returns their length.
-#[inline(never)]
-fn tick(
-    rig: &mut Rig,
-    player: &mut Player<'static, MAX_CHANNELS>,
-    t_us: u64,
-    out: &mut [i32; MAX_CHANNELS],
-    held: &mut [u16; MAX_SERVOS],
-    bytes: &mut [u8; TICK_BYTES],
-) -> Result<usize, Failure> {
-    decoder_glue::sample_at(player, t_us, out).map_err(|e| Failure::Decoder("sample", e))?;
-    let mut targets = [6000u16; MAX_SERVOS];
-    for ((t, s), v) in targets
-        .iter_mut()
-        .zip(&rig.servos)
-        .zip(out.iter())
-        .take(rig.count)
-    {
-        *t = s.pulse_qus(*v);
-    }
-    rig.limiter
-        .apply(&targets, held)
-        .map_err(|_| Failure::Servo("limiter"))?;
-    encode(rig, held, bytes)
-}
-
-fn encode(rig: &Rig, held: &[u16; MAX_SERVOS], bytes: &mut [u8]) -> Result<usize, Failure> {
-    if SERVO == 2 {
-        // One group move: the rig's outputs must be consecutive, in rig order.
-        let first = rig.servos.first().map_or(0, |s| s.output);
-        let in_order = rig
-            .servos
+    /// Whether every servo was last commanded its neutral (true before the first tick).
+    pub fn parked(&self) -> bool {
+        self.rig
+            .limiter
+            .limits()
             .iter()
-            .take(rig.count)
-            .enumerate()
-            .all(|(i, s)| usize::from(s.output) == usize::from(first) + i);
-        let first = u8::try_from(first).map_err(|_| Failure::Servo("output above 255"))?;
-        if !in_order {
-            return Err(Failure::Servo(
-                "ssc32 needs consecutive outputs in rig order",
-            ));
-        }
-        // The tick in ms, rounded (as `mocap play`).
-        let mhz = u64::from(rig.rate_mhz.max(1));
-        let period_ms = (1_000_000 + mhz / 2) / mhz;
-        let time_ms = u16::try_from(period_ms).unwrap_or(u16::MAX).max(1);
-        let pulses = held.get(..rig.count).unwrap_or(&[]);
-        return ssc32::group_move(first, pulses, time_ms, bytes)
-            .map_err(|_| Failure::Servo("ssc32"));
+            .zip(self.rig.limiter.last())
+            .all(|(l, &p)| p == l.neutral_qus)
     }
-    let mut at = 0;
-    for (s, &p) in rig.servos.iter().zip(held.iter()).take(rig.count) {
-        let ch = u8::try_from(s.output).map_err(|_| Failure::Servo("output above 255"))?;
-        let dst = bytes.get_mut(at..).unwrap_or(&mut []);
-        at += maestro::set_target(ch, p, dst).map_err(|_| Failure::Servo("maestro"))?;
+
+    fn send(&mut self) -> Result<(), Failure> {
+        let pulses = self.held.get(..self.rig.count).unwrap_or(&[]);
+        self.output.write(pulses).map_err(output_failure)
     }
-    Ok(at)
+
+    /// Per-tick figures: `# <key>= per_tick= max_tick= output_per_tick= cpu_x10000_at_48mhz=`.
+    pub fn print_stats(&self, key: &str, calibration_ticks: u32, text: &mut Out) {
+        let cal = calibration_ticks;
+        let n = self.stats.ticks;
+        let per_tick = instructions(self.stats.total_ticks, cal) / n.max(1);
+        text.str("#")
+            .kv(key, n)
+            .kv("per_tick", per_tick)
+            .kv(
+                "max_tick",
+                instructions(u64::from(self.stats.worst_ticks), cal),
+            )
+            .kv(
+                "output_per_tick",
+                instructions(self.stats.output_ticks, cal) / n.max(1),
+            )
+            // Share of a 48 MHz core at one instruction per cycle, in 1/100 %.
+            .kv(
+                "cpu_x10000_at_48mhz",
+                per_tick * u64::from(self.rig.rate_mhz) / 1000 * 10_000 / 48_000_000,
+            )
+            .nl();
+    }
 }
 
-fn print_tick(text: &mut Out, bytes: &[u8]) {
-    if SERVO == 2 {
-        let line = bytes.strip_suffix(b"\r").unwrap_or(bytes);
-        text.str("s ")
-            .str(core::str::from_utf8(line).unwrap_or("?"))
-            .nl();
-        return;
+fn output_failure<E>(e: OutputError<E>) -> Failure {
+    match e {
+        OutputError::Invalid(e) => Failure::ServoCrate("output", e),
+        _ => Failure::Servo("output device failed"),
     }
+}
+
+/// What runs on a [`Driver`]: the flash clip's playback, or the streaming session.
+pub trait Mode {
+    fn run<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
+        self,
+        driver: &mut Driver<O, S>,
+        text: &mut Out,
+    ) -> Result<(), Failure>;
+}
+
+/// Builds the output this firmware was built for (`MOCAP_SERVO`) on its recorder, prints
+/// its `# output=…` line, and runs `mode` on it.
+pub fn drive<M: Mode>(rig: Rig, mode: M, text: &mut Out) -> Result<(), Failure> {
+    let all = rig.outputs();
+    let outputs = all.get(..rig.count).unwrap_or(&[]);
+    let invalid = |e| Failure::ServoCrate("output", e);
+    match SERVO {
+        PWM => {
+            let channels: [DutyRecorder; PWM_CHANNELS] =
+                core::array::from_fn(|_| DutyRecorder::new(PWM_MAX_DUTY));
+            let bank = ServoBank::new(channels.each_ref());
+            let period_us = bank.period_us().get();
+            let output = PwmOutput::new(bank, outputs).map_err(invalid)?;
+            text.str("# output=pwm")
+                .kv("channels", PWM_CHANNELS as u64)
+                .kv("max_duty", u64::from(PWM_MAX_DUTY))
+                .kv("period_us", u64::from(period_us))
+                .nl();
+            let show = |text: &mut Out| {
+                text.str("p");
+                for channel in &channels {
+                    text.str(" ").u32(u32::from(channel.duty()));
+                }
+                text.nl();
+                Ok(())
+            };
+            mode.run(&mut Driver::new(rig, output, show), text)
+        }
+        PCA9685 => {
+            let bus = I2cRecorder::<I2C_RECORD_BYTES>::new();
+            text.str("# output=pca9685")
+                .kv("address", u64::from(PCA9685_ADDRESS))
+                .kv("prescale", u64::from(pca9685::PRESCALE_50HZ))
+                .nl();
+            let device =
+                Pca9685Servos::new(&bus, Address::from(PCA9685_ADDRESS)).map_err(output_failure)?;
+            // The set-up writes (prescale, wake) on a line of their own.
+            print_i2c(&bus, text)?;
+            let output = Pca9685Output::new(device, outputs).map_err(invalid)?;
+            let show = |text: &mut Out| print_i2c(&bus, text);
+            mode.run(&mut Driver::new(rig, output, show), text)
+        }
+        SSC32 => {
+            let port = SerialRecorder::<TICK_BYTES>::new();
+            // The tick in ms, rounded (as `mocap play`).
+            let mhz = u64::from(rig.rate_mhz.max(1));
+            let period_ms = u16::try_from((1_000_000 + mhz / 2) / mhz)
+                .unwrap_or(u16::MAX)
+                .max(1);
+            let output = Ssc32Output::new(&port, outputs, period_ms).map_err(invalid)?;
+            text.str("# output=ssc32")
+                .kv("time_ms", u64::from(period_ms))
+                .nl();
+            let show = |text: &mut Out| {
+                let printed = port.with_bytes(|bytes| {
+                    let line = bytes.strip_suffix(b"\r").unwrap_or(bytes);
+                    text.str("s ")
+                        .str(core::str::from_utf8(line).unwrap_or("?"))
+                        .nl();
+                });
+                port.clear();
+                printed.map_err(|_| Failure::Servo("recorder"))
+            };
+            mode.run(&mut Driver::new(rig, output, show), text)
+        }
+        _ => {
+            // MOCAP_SERVO=maestro, and the streaming mode's default.
+            let port = SerialRecorder::<TICK_BYTES>::new();
+            let output = MaestroOutput::new(&port, outputs).map_err(invalid)?;
+            text.str("# output=maestro").nl();
+            let show = |text: &mut Out| {
+                let printed = port.with_bytes(|bytes| {
+                    text.str("m");
+                    hex(text, bytes);
+                    text.nl();
+                });
+                port.clear();
+                printed.map_err(|_| Failure::Servo("recorder"))
+            };
+            mode.run(&mut Driver::new(rig, output, show), text)
+        }
+    }
+}
+
+/// ` xx` for every byte.
+pub fn hex(text: &mut Out, bytes: &[u8]) {
+    for &b in bytes {
+        text.str(" ");
+        hex_byte(text, b);
+    }
+}
+
+fn hex_byte(text: &mut Out, b: u8) {
     const HEX: &[u8; 16] = b"0123456789abcdef";
-    text.str("m");
-    for b in bytes {
-        let pair = [HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]];
-        text.str(" ")
-            .str(core::str::from_utf8(&pair).unwrap_or("??"));
-    }
+    let pair = [HEX[usize::from(b >> 4)], HEX[usize::from(b & 15)]];
+    text.str(core::str::from_utf8(&pair).unwrap_or("??"));
+}
+
+/// `i @aa xx xx … @aa …`: every I²C write since the last line, then forgets them.
+fn print_i2c<const CAP: usize>(bus: &I2cRecorder<CAP>, text: &mut Out) -> Result<(), Failure> {
+    text.str("i");
+    let printed = bus.for_each_write(|address, bytes| {
+        text.str(" @");
+        hex_byte(text, address);
+        hex(text, bytes);
+    });
     text.nl();
+    bus.clear();
+    printed.map_err(|_| Failure::Servo("recorder"))
+}
+
+/// The flash clip at its rig's rate: ticks `0 … tick_count`, then back to neutral.
+pub struct FlashClip<'a> {
+    pub clip: &'a Clip<'static>,
+    pub calibration_ticks: u32,
+}
+
+impl Mode for FlashClip<'_> {
+    fn run<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
+        self,
+        driver: &mut Driver<O, S>,
+        text: &mut Out,
+    ) -> Result<(), Failure> {
+        let mut player =
+            decoder_glue::new_player(self.clip).map_err(|e| Failure::Decoder("player", e))?;
+        let rate_mhz = driver.rig.rate_mhz;
+        let n_ticks = tick_count(self.clip.header().duration_us(), rate_mhz);
+        text.str("# mode=servo")
+            .kv("servos", driver.rig.count as u64)
+            .kv("rate_mhz", u64::from(rate_mhz))
+            .kv("ticks", n_ticks)
+            .nl();
+        let mut angles = [0i32; PLAYER_WORDS];
+        for i in 0..n_ticks {
+            driver.clip_tick(&mut player, tick_us(i, rate_mhz), &mut angles, text)?;
+        }
+        driver.park(text)?;
+        driver.print_stats("servo_ticks", self.calibration_ticks, text);
+        text.str("#")
+            .kv("stack_bytes_used", crate::stack::used_bytes() as u64)
+            .nl();
+        Ok(())
+    }
+}
+
+/// Servo mode: the flash clip through the selected output.
+pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Result<(), Failure> {
+    let rig = Rig::from_clip(clip)?;
+    drive(
+        rig,
+        FlashClip {
+            clip,
+            calibration_ticks,
+        },
+        text,
+    )
 }

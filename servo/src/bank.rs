@@ -21,6 +21,21 @@ pub const PERIOD_50HZ_US: NonZeroU32 = match NonZeroU32::new(20_000) {
 /// a period of `period_us` µs: rounded to nearest, saturating at `max_duty`.
 pub const fn duty_cycle(pulse_qus: u16, period_us: NonZeroU32, max_duty: u16) -> u16 {
     let period_qus = 4 * period_us.get() as u64;
+    // 32-bit arithmetic when it cannot overflow (any servo period): a 64-bit
+    // division is a library call on Cortex-M, 16 of them a tick cost ~10k
+    // instructions on an M3.
+    let product = pulse_qus as u32 * max_duty as u32;
+    if period_qus <= u32::MAX as u64 {
+        let period = period_qus as u32;
+        if let Some(num) = product.checked_add(period / 2) {
+            let duty = num / period;
+            return if duty > max_duty as u32 {
+                max_duty
+            } else {
+                duty as u16
+            };
+        }
+    }
     let duty = (pulse_qus as u64 * max_duty as u64 + period_qus / 2) / period_qus;
     if duty > max_duty as u64 {
         max_duty
@@ -94,6 +109,23 @@ mod tests {
         let tiny = NonZeroU32::new(1).unwrap();
         assert_eq!(duty_cycle(u16::MAX, tiny, u16::MAX), u16::MAX);
         assert_eq!(duty_cycle(u16::MAX, NonZeroU32::MAX, u16::MAX), 0);
+    }
+
+    #[test]
+    fn duty_cycle_matches_the_64_bit_formula() {
+        let reference = |pulse: u16, period: u32, max: u16| {
+            let period_qus = 4 * u64::from(period);
+            let duty = (u64::from(pulse) * u64::from(max) + period_qus / 2) / period_qus;
+            duty.min(u64::from(max)) as u16
+        };
+        for period in [1, 2_500, 20_000, 1 << 30, u32::MAX] {
+            let p = NonZeroU32::new(period).unwrap();
+            for pulse in (0..=u16::MAX).step_by(97).chain([u16::MAX]) {
+                for max in [1, 255, 4095, 20_000, u16::MAX] {
+                    assert_eq!(duty_cycle(pulse, p, max), reference(pulse, period, max));
+                }
+            }
+        }
     }
 
     #[test]

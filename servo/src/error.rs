@@ -75,6 +75,17 @@ pub enum Error {
     /// The CRC matched but the bytes are not exactly one valid message (or,
     /// never for a message within the limits, postcard could not encode one).
     FrameMessage,
+    /// More servos than an output drives or a `Pose` carries.
+    TooManyServos {
+        /// Servos given.
+        count: usize,
+        /// The most the output drives.
+        max: usize,
+    },
+    /// An SSC-32 group move needs consecutive channels; these are not.
+    OutputChannelsNotConsecutive,
+    /// A serial port accepted none of the bytes written to it.
+    OutputWriteZero,
 }
 
 impl fmt::Display for Error {
@@ -115,6 +126,13 @@ impl fmt::Display for Error {
                 "frame CRC mismatch (stored {stored:#010x}, computed {computed:#010x}), dropped"
             ),
             Error::FrameMessage => f.write_str("frame does not hold exactly one valid message, dropped"),
+            Error::TooManyServos { count, max } => {
+                write!(f, "{count} servos, at most {max} allowed")
+            }
+            Error::OutputChannelsNotConsecutive => {
+                f.write_str("an SSC-32 group move needs consecutive channels")
+            }
+            Error::OutputWriteZero => f.write_str("the serial port accepted no bytes"),
         }
     }
 }

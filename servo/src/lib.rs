@@ -13,14 +13,18 @@
 //! # Flow
 //!
 //! ```text
-//! decoded frame / streamed Pose ──► Limiter::apply ──► ServoBank::write     (PWM)
-//!                                   (clamp, speed)  ├► Pca9685Servos::write (I²C)
-//!                                                   ├► maestro::set_multiple_targets (UART)
-//!                                                   └► ssc32::group_move              (UART)
+//! decoded frame / streamed Pose ──► Limiter::apply ──► ServoOutput::write
+//!                                   (clamp, speed)     ├► PwmOutput     → ServoBank::write     (PWM)
+//!                                                      ├► Pca9685Output → Pca9685Servos::write (I²C)
+//!                                                      ├► MaestroOutput → maestro::set_target  (UART)
+//!                                                      └► Ssc32Output   → ssc32::group_move    (UART)
 //! ```
 //!
 //! Every output should take its pulses from a [`Limiter`]: it is what
 //! guarantees that no pulse outside a servo's limits is ever commanded.
+//! [`output`] puts the four outputs behind one trait, so one playback loop
+//! drives any of them; [`record`] has devices that record instead of
+//! driving hardware (QEMU, host checks).
 //!
 //! # Features
 //!
@@ -47,8 +51,10 @@ pub mod bank;
 mod error;
 pub mod limits;
 pub mod maestro;
+pub mod output;
 #[cfg(feature = "pca9685")]
 pub mod pca9685;
+pub mod record;
 pub mod ssc32;
 pub mod stream;
 #[cfg(test)]
@@ -57,6 +63,7 @@ mod test_rng;
 pub use bank::ServoBank;
 pub use error::{Error, OutputError};
 pub use limits::{Limiter, ServoLimits};
+pub use output::ServoOutput;
 #[cfg(feature = "pca9685")]
 pub use pca9685::Pca9685Servos;
 pub use stream::{decode_frame, encode_frame, FrameReceiver, Message};

@@ -104,6 +104,17 @@ pub enum Message<'a> {
     },
 }
 
+impl Message<'_> {
+    /// A `Pose` of `pulses` (at most [`MAX_POSE_SERVOS`]).
+    pub fn pose(seq: u16, pulses: &[u16]) -> Result<Self, Error> {
+        let pulses = heapless::Vec::from_slice(pulses).map_err(|_| Error::TooManyServos {
+            count: pulses.len(),
+            max: MAX_POSE_SERVOS,
+        })?;
+        Ok(Message::Pose { seq, pulses })
+    }
+}
+
 /// Encodes `message` as one complete frame (delimiter included) into `buf`
 /// and returns its length, at most [`MAX_FRAME_LEN`].
 pub fn encode_frame(message: &Message<'_>, buf: &mut [u8]) -> Result<usize, Error> {
@@ -299,10 +310,18 @@ mod tests {
     use super::*;
 
     fn pose(seq: u16, pulses: &[u16]) -> Message<'static> {
-        Message::Pose {
-            seq,
-            pulses: heapless::Vec::from_slice(pulses).unwrap(),
-        }
+        Message::pose(seq, pulses).unwrap()
+    }
+
+    #[test]
+    fn pose_refuses_more_servos_than_a_frame_carries() {
+        assert_eq!(
+            Message::pose(0, &[6000; MAX_POSE_SERVOS + 1]),
+            Err(Error::TooManyServos {
+                count: MAX_POSE_SERVOS + 1,
+                max: MAX_POSE_SERVOS
+            })
+        );
     }
 
     fn every_message() -> [Message<'static>; 8] {

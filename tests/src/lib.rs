@@ -1,5 +1,6 @@
 //! Shared helpers for the workspace tests: where the corpus is, and a
-//! visible skip when it is not there.
+//! visible skip when it is not there; running the firmware in QEMU
+//! (`scripts/firmware.sh`); the demo's servo clip.
 
 use std::path::PathBuf;
 
@@ -76,4 +77,81 @@ pub fn exercise_decoder(bytes: &[u8]) -> Result<u64, mocap_decoder::Error> {
     player.sample_at(clip.header().duration_us() / 3, &mut out)?;
     player.sample_at(u64::MAX, &mut out)?;
     Ok(sum)
+}
+
+/// Whether `qemu-system-arm` runs; without it a test prints SKIPPED and
+/// returns, except under `CI`, where a missing emulator fails it.
+pub fn qemu_available() -> bool {
+    let ok = std::process::Command::new("qemu-system-arm")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        if std::env::var_os("CI").is_some() {
+            panic!("qemu-system-arm missing in CI: run the README's test command");
+        }
+        skipped("qemu-system-arm not found (run scripts/test.sh, which installs it)");
+    }
+    ok
+}
+
+/// `scripts/firmware.sh run --board <board> --clip <clip> <args…>`: the
+/// firmware's UART output; panics (with its `#` lines) unless it succeeds.
+pub fn run_firmware(board: &str, clip: &std::path::Path, args: &[&str]) -> String {
+    let out = std::process::Command::new("bash")
+        .arg(workspace_root().join("scripts/firmware.sh"))
+        .args(["run", "--board", board, "--clip"])
+        .arg(clip)
+        .args(args)
+        .output()
+        .expect("scripts/firmware.sh runs");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{board} {} {args:?}: firmware failed ({}):\n{}\n{}",
+        clip.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stderr),
+        stdout
+            .lines()
+            .filter(|l| l.starts_with('#'))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+    stdout
+}
+
+/// The UART output without its `#` statistics lines.
+pub fn data_lines(uart: &str) -> String {
+    uart.lines()
+        .filter(|l| !l.starts_with('#'))
+        .flat_map(|l| [l, "\n"])
+        .collect()
+}
+
+/// The demo's servo clip (`mocap encode assets/animatronic_demo.bvh --rig
+/// assets/rigs/animatronic_demo.toml --codec pca-spline --max-error 0.5deg`),
+/// written to `target/qemu-parity/<name>.mcb`.
+pub fn servo_demo_clip(name: &str) -> (PathBuf, Vec<u8>) {
+    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    use mocap_encoder::{generate, rig::Rig, servo_clip, units};
+    let root = workspace_root();
+    let rig = Rig::read_file(&root.join("assets/rigs/animatronic_demo.toml")).unwrap();
+    let m = generate::animatronic_demo();
+    let channels = rig.resolve(&m.skeleton).unwrap();
+    let tracks = rig.servo_tracks(&m, &channels, units::detect(&m).metres());
+    let sm = servo_clip::servo_motion(&rig, &tracks);
+    let opts = EncodeOptions {
+        codec: CodecChoice::PcaSpline,
+        bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
+        metres_per_unit: 1e-3,
+        key_interval: None,
+    };
+    let enc = encode::encode(&sm, &opts).unwrap();
+    let bytes = servo_clip::attach_rig(&enc.bytes, &rig).unwrap();
+    let dir = root.join("target/qemu-parity");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.mcb"));
+    std::fs::write(&path, &bytes).unwrap();
+    (path, bytes)
 }

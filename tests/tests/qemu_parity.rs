@@ -11,32 +11,19 @@
 //! where a missing emulator is a failure.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use mocap_decoder::Clip;
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, clipfile, generate, motion::Motion, units};
-use mocap_tests::{corpus_files, workspace_root};
+use mocap_tests::{
+    corpus_files, data_lines, qemu_available, run_firmware, servo_demo_clip, workspace_root,
+};
 
 const BOARDS: [&str; 3] = ["microbit", "lm3s6965", "mps2-an386"];
 
 /// Sample mode period: a 50 Hz servo rate, which falls between the frames of
 /// a 120 Hz clip.
 const SERVO_PERIOD_US: u64 = 20_000;
-
-fn qemu_available() -> bool {
-    let ok = Command::new("qemu-system-arm")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        if std::env::var_os("CI").is_some() {
-            panic!("qemu-system-arm missing in CI: run the README's test command");
-        }
-        mocap_tests::skipped("qemu-system-arm not found (run scripts/test.sh, which installs it)");
-    }
-    ok
-}
 
 fn encode_to(
     m: &Motion,
@@ -61,39 +48,15 @@ fn run_board(board: &str, clip: &Path, sample_us: Option<u64>) -> String {
 }
 
 fn run_board_with(board: &str, clip: &Path, sample_us: Option<u64>, servo: Option<&str>) -> String {
-    let mut cmd = Command::new("bash");
-    cmd.arg(workspace_root().join("scripts/firmware.sh"))
-        .args(["run", "--board", board, "--clip"])
-        .arg(clip);
-    if let Some(p) = sample_us {
-        cmd.args(["--sample-us", &p.to_string()]);
+    let sample = sample_us.map(|p| p.to_string());
+    let mut args = Vec::new();
+    if let Some(p) = &sample {
+        args.extend(["--sample-us", p.as_str()]);
     }
     if let Some(p) = servo {
-        cmd.args(["--servo", p]);
+        args.extend(["--servo", p]);
     }
-    let out = cmd.output().expect("scripts/firmware.sh runs");
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "{board} {}: firmware failed ({}):\n{}\n{}",
-        clip.display(),
-        out.status,
-        String::from_utf8_lossy(&out.stderr),
-        stdout
-            .lines()
-            .filter(|l| l.starts_with('#'))
-            .collect::<Vec<_>>()
-            .join("\n")
-    );
-    stdout
-}
-
-/// The UART output without its `#` statistics lines.
-fn data_lines(uart: &str) -> String {
-    uart.lines()
-        .filter(|l| !l.starts_with('#'))
-        .flat_map(|l| [l, "\n"])
-        .collect()
+    run_firmware(board, clip, &args)
 }
 
 fn check(name: &str, m: &Motion, key_interval: Option<u16>) {
@@ -199,44 +162,22 @@ fn pca_spline_firmware_output_matches_host_on_three_cores() {
 #[test]
 fn servo_clip_commands_match_host_on_three_cores() {
     use mocap_encoder::play::Protocol;
-    use mocap_encoder::rig::Rig;
-    use mocap_encoder::servo_clip;
     if !qemu_available() {
         return;
     }
-    let root = workspace_root();
-    let rig = Rig::read_file(&root.join("assets/rigs/animatronic_demo.toml")).unwrap();
-    let m = generate::animatronic_demo();
-    let channels = rig.resolve(&m.skeleton).unwrap();
-    let tracks = rig.servo_tracks(&m, &channels, units::detect(&m).metres());
-    let sm = servo_clip::servo_motion(&rig, &tracks);
-    let opts = EncodeOptions {
-        codec: CodecChoice::PcaSpline,
-        bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
-        metres_per_unit: 1e-3,
-        key_interval: None,
-    };
-    let enc = encode::encode(&sm, &opts).unwrap();
-    let bytes = servo_clip::attach_rig(&enc.bytes, &rig).unwrap();
-    let dir = root.join("target/qemu-parity");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("servo-demo.mcb");
-    std::fs::write(&path, &bytes).unwrap();
+    let (path, bytes) = servo_demo_clip("servo-demo");
     let clip = Clip::parse(&bytes).unwrap();
     for (protocol, name) in [(Protocol::Maestro, "maestro"), (Protocol::Ssc32, "ssc32")] {
-        check_servo_mode(&clip, &path, protocol, name);
+        let expected = serial_lines(&clip, protocol);
+        check_servo_output(&path, name, &expected, None);
     }
 }
 
-fn check_servo_mode(
-    clip: &Clip<'_>,
-    path: &Path,
-    protocol: mocap_encoder::play::Protocol,
-    name: &str,
-) {
+/// `mocap play`'s Maestro bytes as hex lines, its SSC-32 text without the `\r`.
+fn serial_lines(clip: &Clip<'_>, protocol: mocap_encoder::play::Protocol) -> String {
     use mocap_encoder::play::{servo_clip_stream, Protocol};
     let stream = servo_clip_stream(clip, protocol, None).unwrap();
-    let expected: String = stream
+    stream
         .ticks
         .iter()
         .map(|t| match protocol {
@@ -252,21 +193,126 @@ fn check_servo_mode(
                 format!("s {}\n", text.strip_suffix('\r').unwrap())
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Runs the firmware's servo mode with `output` on every board and compares
+/// its tick lines with `expected` (and its `# output=` line with `header`).
+fn check_servo_output(path: &Path, output: &str, expected: &str, header: Option<&str>) {
     for board in BOARDS {
-        let uart = run_board_with(board, path, None, Some(name));
+        let uart = run_board_with(board, path, None, Some(output));
+        if let Some(header) = header {
+            // The peripheral the host simulated is the firmware's.
+            assert!(uart.lines().any(|l| l == header), "{board}: no `{header}`");
+        }
         let data = data_lines(&uart);
         assert!(
             data == expected,
-            "servo clip on {board}: {name} commands differ from mocap play ({} vs {} ticks)",
+            "servo clip on {board}: {output} lines differ from the host ({} vs {} ticks)",
             data.lines().count(),
             expected.lines().count()
         );
         let stats: Vec<&str> = uart.lines().filter(|l| l.starts_with("# ")).collect();
         eprintln!(
-            "servo clip on {board}: {} ticks of {name} commands identical; {}",
-            stream.ticks.len(),
+            "servo clip on {board}: {} lines of {output} output identical; {}",
+            expected.lines().count(),
             stats.join("; ")
         );
+    }
+}
+
+/// The firmware's simulated PWM peripheral and PCA9685 (firmware-example/src/servo.rs), as
+/// its `# output=` line states them.
+const PWM_CHANNELS: usize = 16;
+const PWM_MAX_DUTY: u16 = u16::MAX;
+const PCA9685_ADDRESS: u8 = 0x40;
+
+/// `mocap play`'s pulses (clip ticks, then the return to neutral) through the same
+/// `mocap_servo::output::PwmOutput` on 16 recording `SetDutyCycle` channels: a line per tick
+/// of every channel's duty.
+fn pwm_lines(pulses: &[Vec<u16>], outputs: &[u16]) -> String {
+    use mocap_servo::output::{PwmOutput, ServoOutput};
+    use mocap_servo::record::DutyRecorder;
+    use mocap_servo::ServoBank;
+    let channels: [DutyRecorder; PWM_CHANNELS] =
+        std::array::from_fn(|_| DutyRecorder::new(PWM_MAX_DUTY));
+    let mut output = PwmOutput::new(ServoBank::new(channels.each_ref()), outputs).unwrap();
+    let mut text = String::new();
+    for tick in pulses {
+        output.write(tick).unwrap();
+        text += "p";
+        for c in &channels {
+            text += &format!(" {}", c.duty());
+        }
+        text += "\n";
+    }
+    text
+}
+
+/// The same pulses through `Pca9685Output` (pwm-pca9685 at 50 Hz) on a recording I²C bus: the
+/// set-up writes, then a line per tick of every write (`@address` and its bytes).
+fn pca9685_lines(pulses: &[Vec<u16>], outputs: &[u16]) -> String {
+    use mocap_servo::output::{Pca9685Output, ServoOutput};
+    use mocap_servo::pca9685::{Address, Pca9685Servos};
+    use mocap_servo::record::I2cRecorder;
+    let bus = I2cRecorder::<1024>::new();
+    let line = |bus: &I2cRecorder<1024>| {
+        let mut line = String::from("i");
+        bus.for_each_write(|address, bytes| {
+            line += &format!(" @{address:02x}");
+            for b in bytes {
+                line += &format!(" {b:02x}");
+            }
+        })
+        .unwrap();
+        bus.clear();
+        line + "\n"
+    };
+    let device = Pca9685Servos::new(&bus, Address::from(PCA9685_ADDRESS)).unwrap();
+    let mut text = line(&bus);
+    let mut output = Pca9685Output::new(device, outputs).unwrap();
+    for tick in pulses {
+        output.write(tick).unwrap();
+        text += &line(&bus);
+    }
+    text
+}
+
+/// The playback loop's two other outputs: PWM channels through `ServoBank`
+/// (embedded-hal `SetDutyCycle`) and a PCA9685 over I²C. QEMU's boards have
+/// neither, so the firmware drives recording devices and prints a line per
+/// tick; the host drives the same outputs with `mocap play`'s pulses.
+#[test]
+fn servo_clip_pwm_and_pca9685_match_host_on_three_cores() {
+    use mocap_encoder::play::{servo_clip_stream, Protocol};
+    if !qemu_available() {
+        return;
+    }
+    let (path, bytes) = servo_demo_clip("servo-demo-pwm");
+    let clip = Clip::parse(&bytes).unwrap();
+    let pulses = servo_clip_stream(&clip, Protocol::Maestro, None)
+        .unwrap()
+        .pulses;
+    let outputs: Vec<u16> = clip.rig().unwrap().servos().map(|s| s.output).collect();
+    let pwm = pwm_lines(&pulses, &outputs);
+    let pca = pca9685_lines(&pulses, &outputs);
+    // Sanity of the expectations themselves: a line per tick (and the PCA9685's set-up),
+    // and the servos move.
+    assert_eq!(pwm.lines().count(), pulses.len());
+    assert_eq!(pca.lines().count(), pulses.len() + 1);
+    assert!(pwm.lines().collect::<std::collections::HashSet<_>>().len() > pulses.len() / 2);
+    for (output, expected, header) in [
+        (
+            "pwm",
+            &pwm,
+            format!("# output=pwm channels={PWM_CHANNELS} max_duty={PWM_MAX_DUTY} period_us=20000"),
+        ),
+        (
+            "pca9685",
+            &pca,
+            format!("# output=pca9685 address={PCA9685_ADDRESS} prescale=121"),
+        ),
+    ] {
+        check_servo_output(&path, output, expected, Some(&header));
     }
 }

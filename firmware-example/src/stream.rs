@@ -1,0 +1,594 @@
+//! Streaming mode (`MOCAP_STREAM=1`): the firmware takes its motion from the UART instead of
+//! flash — a clip uploaded in `ClipChunk`s and played on `Play`, or live `Pose`s — as frames of
+//! postcard + COBS + CRC-32 (SPEC.md §8, `mocap_servo::stream`), and drives the servos through
+//! the same [`Driver`] as the servo mode (output `MOCAP_SERVO`, Maestro when unset).
+//!
+//! - **Link.** Bytes go from the UART's receive FIFO into a fixed ring ([`RING_BYTES`],
+//!   `heapless::Deque`), then one by one into a `FrameReceiver<MAX_FRAME_LEN>`: corrupt frames
+//!   are dropped and counted, reception resynchronises at the next `00`. (Here the ring is
+//!   filled by polling between ticks and QEMU holds bytes back while the UART is full; on a
+//!   board, `Link::pump` is the receive interrupt's body.)
+//! - **Rig.** The servos and their limits are the firmware's own: the rig table of the servo
+//!   clip embedded at build time (`MOCAP_CLIP`). A streamed clip must carry the same rig table,
+//!   and live poses are held to its limits by the `Limiter`, whatever the host sends.
+//! - **Upload.** `ClipChunk`s are assembled in a fixed RAM buffer
+//!   ([`crate::board::CLIP_BUFFER_BYTES`]): offset 0 starts an upload of `total` bytes (at most
+//!   the buffer), every further chunk must continue it exactly (same `total`, `offset` = bytes
+//!   so far); anything else is rejected and counted. `Play` parses the complete clip with
+//!   `Clip::parse` (CRC-checked) and plays it from tick 0 at the rig's rate — or refuses it
+//!   (incomplete, corrupt, another rig). A chunk that arrives while a clip plays is rejected.
+//! - **Live poses.** `Pose.seq` counts the sender's ticks: each pose is one tick towards its
+//!   pulses. A gap in `seq` (lost frames) becomes that many ticks holding the last pose (at most
+//!   [`MAX_HOLD_TICKS`]); a `seq` that is not ahead of the last one (a duplicate or a stale
+//!   frame) is ignored, a pose with the wrong servo count rejected.
+//! - **Stop** (or the end of a clip played without `loop_`, or a decoder error in it) returns
+//!   every servo to neutral at its speed limit; a `Pose`, `Stop` or `Hello` during playback
+//!   interrupts it.
+//! - **Status** frames (`Status { received, dropped, last_seq, state }`, state [`State`]) go back
+//!   in reply to `Hello`, after every `Play` (accepted or refused), every
+//!   [`STATUS_EVERY_TICKS`] output ticks, and once the servos are parked after `Stop` or the
+//!   end of a clip. The firmware greets with `Hello` at start-up.
+//!
+//! QEMU's UART is also the console, so frames sent back are printed as hex lines (`f 0b 05 …`)
+//! and servo commands as in the servo mode. This example ends its run when the servos are
+//! parked after `Stop` or after a clip (a controller would wait for the next session), then
+//! prints its link figures.
+
+use heapless::Deque;
+use mocap_decoder::{tick_count, tick_us, Clip};
+use mocap_servo::output::ServoOutput;
+use mocap_servo::stream::{
+    encode_frame, FrameReceiver, Message, MAX_CHUNK_LEN, MAX_FRAME_LEN, MAX_POSE_SERVOS,
+    PROTOCOL_VERSION,
+};
+
+use crate::board::{Rx, CLIP_BUFFER_BYTES};
+use crate::servo::{hex, Driver, Mode, MAX_SERVOS, PLAYER_WORDS};
+use crate::{decoder_glue, ticks, Failure, Out};
+
+/// The receive ring between the UART and the frame receiver.
+pub const RING_BYTES: usize = 64;
+/// A `Status` every this many output ticks (1 s at 50 Hz).
+pub const STATUS_EVERY_TICKS: u32 = 50;
+/// The most ticks one gap in `Pose.seq` holds the last pose for (1 s at 50 Hz).
+pub const MAX_HOLD_TICKS: u16 = 50;
+
+/// `Status.state`.
+#[derive(Clone, Copy)]
+#[repr(u8)]
+pub enum State {
+    /// Nothing playing; the servos hold their last pulses (neutral at start-up).
+    Idle = 0,
+    /// An upload is in progress.
+    Loading = 1,
+    /// A complete clip is in the buffer, waiting for `Play`.
+    Ready = 2,
+    /// Playing the uploaded clip.
+    Playing = 3,
+    /// Following live poses.
+    Live = 4,
+    /// The last `Play` was refused: clip incomplete, corrupt or for another rig.
+    Refused = 5,
+}
+
+/// A received message, copied out of the frame receiver.
+enum Event {
+    Hello,
+    Chunk {
+        offset: u32,
+        total: u32,
+        bytes: heapless::Vec<u8, MAX_CHUNK_LEN>,
+    },
+    Play {
+        looped: bool,
+    },
+    Pose {
+        seq: u16,
+        pulses: heapless::Vec<u16, MAX_POSE_SERVOS>,
+    },
+    Stop,
+    /// A message the MCU does not take (`Status`, a `Hello` of another version).
+    Other,
+}
+
+impl Event {
+    fn from_message(message: &Message<'_>) -> Self {
+        match message {
+            Message::Hello { version } if *version == PROTOCOL_VERSION => Event::Hello,
+            Message::ClipChunk {
+                offset,
+                total,
+                bytes,
+            } => match heapless::Vec::from_slice(bytes) {
+                Ok(bytes) => Event::Chunk {
+                    offset: *offset,
+                    total: *total,
+                    bytes,
+                },
+                Err(_) => Event::Other,
+            },
+            Message::Play { loop_ } => Event::Play { looped: *loop_ },
+            Message::Pose { seq, pulses } => Event::Pose {
+                seq: *seq,
+                pulses: pulses.clone(),
+            },
+            Message::Stop => Event::Stop,
+            _ => Event::Other,
+        }
+    }
+}
+
+/// UART → ring → frame receiver, with the resynchronisation figures.
+struct Link {
+    rx: Rx,
+    ring: Deque<u8, RING_BYTES>,
+    frames: FrameReceiver<MAX_FRAME_LEN>,
+    /// Bytes taken from the UART.
+    bytes: u32,
+    /// Bytes of the frame in progress.
+    frame_bytes: u32,
+    /// The run of dropped frames since the last accepted one: frames and bytes.
+    run_frames: u32,
+    run_bytes: u32,
+    /// Runs ended by an accepted frame; their bytes in all; the longest in bytes and frames.
+    resyncs: u32,
+    resync_bytes: u32,
+    resync_bytes_max: u32,
+    resync_frames_max: u32,
+    /// SysTick ticks spent on the delimiters: COBS, CRC-32 and postcard of each frame.
+    decode_ticks: u64,
+    /// Frames ended, accepted or dropped (not the empty ones).
+    frames_ended: u32,
+}
+
+impl Link {
+    fn new(rx: Rx) -> Self {
+        Link {
+            rx,
+            ring: Deque::new(),
+            frames: FrameReceiver::new(),
+            bytes: 0,
+            frame_bytes: 0,
+            run_frames: 0,
+            run_bytes: 0,
+            resyncs: 0,
+            resync_bytes: 0,
+            resync_bytes_max: 0,
+            resync_frames_max: 0,
+            decode_ticks: 0,
+            frames_ended: 0,
+        }
+    }
+
+    /// Moves waiting bytes from the UART into the ring, as far as it has room (the rest stay
+    /// in the UART).
+    fn pump(&mut self) {
+        while !self.ring.is_full() {
+            let Some(byte) = self.rx.read_byte() else {
+                return;
+            };
+            // Cannot fail: the ring is not full.
+            let _ = self.ring.push_back(byte);
+        }
+    }
+
+    /// The next accepted message if its last byte has arrived; never waits.
+    fn poll(&mut self) -> Option<Event> {
+        loop {
+            self.pump();
+            let byte = self.ring.pop_front()?;
+            self.bytes = self.bytes.wrapping_add(1);
+            self.frame_bytes = self.frame_bytes.wrapping_add(1);
+            // Only a delimiter costs more than a store: time those.
+            let start = if byte == 0 { Some(ticks::now()) } else { None };
+            let pushed = self.frames.push(byte);
+            if let (Some(start), Some(_)) = (start, &pushed) {
+                self.decode_ticks += u64::from(ticks::since(start, ticks::now()));
+                self.frames_ended += 1;
+            }
+            let event = match pushed {
+                None => {
+                    if byte == 0 {
+                        // An empty frame: counted with the run it interrupts, if any.
+                        self.end_frame(false);
+                    }
+                    continue;
+                }
+                Some(Ok(message)) => Event::from_message(&message),
+                Some(Err(_)) => {
+                    self.end_frame(true);
+                    continue;
+                }
+            };
+            self.end_frame(false);
+            if self.run_frames > 0 {
+                self.resyncs += 1;
+                self.resync_bytes = self.resync_bytes.saturating_add(self.run_bytes);
+                self.resync_bytes_max = self.resync_bytes_max.max(self.run_bytes);
+                self.resync_frames_max = self.resync_frames_max.max(self.run_frames);
+                self.run_frames = 0;
+                self.run_bytes = 0;
+            }
+            return Some(event);
+        }
+    }
+
+    /// A frame ended: a dropped one joins the current run, an empty one adds its byte to it.
+    fn end_frame(&mut self, dropped: bool) {
+        let len = core::mem::take(&mut self.frame_bytes);
+        if dropped {
+            self.run_frames += 1;
+        }
+        if self.run_frames > 0 && len > 0 {
+            self.run_bytes = self.run_bytes.saturating_add(len);
+        }
+    }
+
+    /// Waits for the next accepted message.
+    fn wait(&mut self) -> Event {
+        loop {
+            if let Some(event) = self.poll() {
+                return event;
+            }
+        }
+    }
+}
+
+/// The clip being uploaded into the RAM buffer.
+#[derive(Default)]
+struct Upload {
+    /// Bytes announced by the chunk at offset 0 (0: no upload).
+    total: usize,
+    /// Bytes received in order so far.
+    len: usize,
+}
+
+impl Upload {
+    /// Takes a chunk into `buffer` if it continues the upload (or starts one at offset 0).
+    fn accept(&mut self, buffer: &mut [u8], offset: u32, total: u32, bytes: &[u8]) -> bool {
+        let (offset, total) = (offset as usize, total as usize);
+        if offset == 0 {
+            // A new upload; one that cannot fit ends the old one too.
+            *self = Upload::default();
+            if total == 0 || total > buffer.len() {
+                return false;
+            }
+            self.total = total;
+        } else if self.total == 0 || total != self.total || offset != self.len {
+            return false;
+        }
+        let end = self.len + bytes.len();
+        match buffer.get_mut(self.len..end) {
+            Some(slot) if end <= self.total => {
+                slot.copy_from_slice(bytes);
+                self.len = end;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    fn complete<'b>(&self, buffer: &'b [u8]) -> Option<&'b [u8]> {
+        if self.total > 0 && self.len == self.total {
+            buffer.get(..self.total)
+        } else {
+            None
+        }
+    }
+}
+
+/// The session's state and counters.
+struct Session {
+    state: State,
+    /// `seq` of the last pose applied (reported in `Status`).
+    last_seq: u16,
+    /// While following poses: the `seq` of the last one applied.
+    live: Option<u16>,
+    /// The last pose's pulses (held on a gap).
+    targets: [u16; MAX_SERVOS],
+    since_status: u32,
+    chunks_accepted: u32,
+    chunks_rejected: u32,
+    clips_played: u32,
+    clips_refused: u32,
+    /// Clips the decoder failed on while playing (then parked).
+    clips_failed: u32,
+    poses_applied: u32,
+    poses_missing: u32,
+    poses_stale: u32,
+    poses_rejected: u32,
+    held_ticks: u32,
+    status_frames: u32,
+    other_frames: u32,
+}
+
+impl Session {
+    fn new() -> Self {
+        Session {
+            state: State::Idle,
+            last_seq: 0,
+            live: None,
+            targets: [6000; MAX_SERVOS],
+            since_status: 0,
+            chunks_accepted: 0,
+            chunks_rejected: 0,
+            clips_played: 0,
+            clips_refused: 0,
+            clips_failed: 0,
+            poses_applied: 0,
+            poses_missing: 0,
+            poses_stale: 0,
+            poses_rejected: 0,
+            held_ticks: 0,
+            status_frames: 0,
+            other_frames: 0,
+        }
+    }
+
+    /// Sends `Status` now.
+    fn status(&mut self, link: &Link, text: &mut Out) -> Result<(), Failure> {
+        send(
+            text,
+            &Message::Status {
+                received: link.frames.received(),
+                dropped: link.frames.dropped(),
+                last_seq: self.last_seq,
+                state: self.state as u8,
+            },
+        )?;
+        self.status_frames += 1;
+        self.since_status = 0;
+        Ok(())
+    }
+
+    /// After an output tick: `Status` every [`STATUS_EVERY_TICKS`].
+    fn ticked(&mut self, link: &Link, text: &mut Out) -> Result<(), Failure> {
+        self.since_status += 1;
+        if self.since_status >= STATUS_EVERY_TICKS {
+            self.status(link, text)?;
+        }
+        Ok(())
+    }
+
+    /// A live pose: ticks holding the last pose for the frames missing before it, then one
+    /// tick towards it.
+    fn pose<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
+        &mut self,
+        seq: u16,
+        pulses: &[u16],
+        driver: &mut Driver<O, S>,
+        link: &Link,
+        text: &mut Out,
+    ) -> Result<(), Failure> {
+        if pulses.len() != driver.rig.count() {
+            self.poses_rejected += 1;
+            return Ok(());
+        }
+        let gap = match self.live {
+            None => 1,
+            Some(last) => seq.wrapping_sub(last),
+        };
+        if gap == 0 || gap >= 0x8000 {
+            self.poses_stale += 1;
+            return Ok(());
+        }
+        let missing = gap - 1;
+        self.poses_missing += u32::from(missing);
+        for _ in 0..missing.min(MAX_HOLD_TICKS) {
+            driver.command(&self.targets, ticks::now(), text)?;
+            self.held_ticks += 1;
+            self.ticked(link, text)?;
+        }
+        let start = ticks::now();
+        for (t, &p) in self.targets.iter_mut().zip(pulses) {
+            *t = p;
+        }
+        driver.command(&self.targets, start, text)?;
+        self.poses_applied += 1;
+        self.live = Some(seq);
+        self.last_seq = seq;
+        self.state = State::Live;
+        self.ticked(link, text)
+    }
+}
+
+/// Writes one frame back to the host (printed as a hex line here, see the module doc).
+fn send(text: &mut Out, message: &Message<'_>) -> Result<(), Failure> {
+    let mut frame = [0u8; MAX_FRAME_LEN];
+    let len = encode_frame(message, &mut frame).map_err(|e| Failure::ServoCrate("frame", e))?;
+    text.str("f");
+    hex(text, frame.get(..len).unwrap_or(&[]));
+    text.nl();
+    Ok(())
+}
+
+/// How a clip's playback ended.
+enum Played {
+    /// At its end (not looped).
+    Ended,
+    /// By a message (`Stop`, `Pose`, `Hello`), to be handled next.
+    Interrupted(Event),
+    /// The decoder refused the clip (a valid CRC does not make valid codec data).
+    Failed,
+}
+
+/// Plays `clip` from tick 0 (again and again when `looped`), taking frames between ticks.
+fn play<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
+    clip: &Clip<'_>,
+    looped: bool,
+    driver: &mut Driver<O, S>,
+    link: &mut Link,
+    session: &mut Session,
+    text: &mut Out,
+) -> Result<Played, Failure> {
+    let Ok(mut player) = decoder_glue::new_player::<PLAYER_WORDS>(clip) else {
+        return Ok(Played::Failed);
+    };
+    let rate_mhz = driver.rig.rate_mhz();
+    let n_ticks = tick_count(clip.header().duration_us(), rate_mhz);
+    let mut angles = [0i32; PLAYER_WORDS];
+    loop {
+        for i in 0..n_ticks {
+            match driver.clip_tick(&mut player, tick_us(i, rate_mhz), &mut angles, text) {
+                Err(Failure::Decoder(..)) => return Ok(Played::Failed),
+                other => other?,
+            }
+            session.ticked(link, text)?;
+            while let Some(event) = link.poll() {
+                match event {
+                    Event::Stop | Event::Pose { .. } | Event::Hello => {
+                        return Ok(Played::Interrupted(event))
+                    }
+                    // The buffer is the clip being played.
+                    Event::Chunk { .. } => session.chunks_rejected += 1,
+                    Event::Play { .. } | Event::Other => session.other_frames += 1,
+                }
+            }
+        }
+        if !looped {
+            return Ok(Played::Ended);
+        }
+    }
+}
+
+/// The streaming session on the firmware's rig.
+pub struct Stream {
+    pub calibration_ticks: u32,
+}
+
+impl Mode for Stream {
+    fn run<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
+        self,
+        driver: &mut Driver<O, S>,
+        text: &mut Out,
+    ) -> Result<(), Failure> {
+        let mut link = Link::new(Rx::take());
+        let mut buffer = [0u8; CLIP_BUFFER_BYTES];
+        let mut upload = Upload::default();
+        let mut s = Session::new();
+        text.str("# mode=stream")
+            .kv("servos", driver.rig.count() as u64)
+            .kv("rate_mhz", u64::from(driver.rig.rate_mhz()))
+            .kv("clip_buffer_bytes", CLIP_BUFFER_BYTES as u64)
+            .kv("ring_bytes", RING_BYTES as u64)
+            .kv("status_every_ticks", u64::from(STATUS_EVERY_TICKS))
+            .nl();
+        send(
+            text,
+            &Message::Hello {
+                version: PROTOCOL_VERSION,
+            },
+        )?;
+        let mut pending = None;
+        loop {
+            let event = match pending.take() {
+                Some(event) => event,
+                None => link.wait(),
+            };
+            match event {
+                Event::Hello => {
+                    upload = Upload::default();
+                    s.live = None;
+                    if !matches!(s.state, State::Playing | State::Live) {
+                        s.state = State::Idle;
+                    }
+                    s.status(&link, text)?;
+                }
+                Event::Chunk {
+                    offset,
+                    total,
+                    bytes,
+                } => {
+                    if upload.accept(&mut buffer, offset, total, &bytes) {
+                        s.chunks_accepted += 1;
+                        let complete = upload.complete(&buffer).is_some();
+                        s.state = if complete {
+                            State::Ready
+                        } else {
+                            State::Loading
+                        };
+                    } else {
+                        s.chunks_rejected += 1;
+                    }
+                }
+                Event::Play { looped } => {
+                    let clip = upload
+                        .complete(&buffer)
+                        .and_then(|bytes| decoder_glue::parse(bytes).ok())
+                        .filter(|clip| driver.rig.matches(clip));
+                    let Some(clip) = clip else {
+                        s.clips_refused += 1;
+                        s.state = State::Refused;
+                        s.status(&link, text)?;
+                        continue;
+                    };
+                    s.clips_played += 1;
+                    s.state = State::Playing;
+                    s.live = None;
+                    s.status(&link, text)?;
+                    s.state = State::Ready;
+                    match play(&clip, looped, driver, &mut link, &mut s, text)? {
+                        Played::Interrupted(event) => pending = Some(event),
+                        // The clip ended: back to neutral, end of the session.
+                        Played::Ended => break,
+                        Played::Failed => {
+                            s.clips_failed += 1;
+                            break;
+                        }
+                    }
+                }
+                Event::Pose { seq, pulses } => s.pose(seq, &pulses, driver, &link, text)?,
+                Event::Stop => break,
+                Event::Other => s.other_frames += 1,
+            }
+        }
+        s.live = None;
+        driver.park(text)?;
+        s.state = State::Idle;
+        s.status(&link, text)?;
+        report(&link, &s, driver, self.calibration_ticks, text);
+        Ok(())
+    }
+}
+
+/// The link and session figures (`#` lines).
+fn report<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
+    link: &Link,
+    s: &Session,
+    driver: &Driver<O, S>,
+    calibration_ticks: u32,
+    text: &mut Out,
+) {
+    text.str("# link")
+        .kv("rx_bytes", u64::from(link.bytes))
+        .kv("frames_received", u64::from(link.frames.received()))
+        .kv("frames_dropped", u64::from(link.frames.dropped()))
+        .kv("resyncs", u64::from(link.resyncs))
+        .kv("resync_bytes_total", u64::from(link.resync_bytes))
+        .kv("resync_bytes_max", u64::from(link.resync_bytes_max))
+        .kv("resync_frames_max", u64::from(link.resync_frames_max))
+        .kv(
+            "decode_per_frame",
+            crate::instructions(link.decode_ticks, calibration_ticks)
+                / u64::from(link.frames_ended.max(1)),
+        )
+        .nl();
+    text.str("# session")
+        .kv("chunks_accepted", u64::from(s.chunks_accepted))
+        .kv("chunks_rejected", u64::from(s.chunks_rejected))
+        .kv("clips_played", u64::from(s.clips_played))
+        .kv("clips_refused", u64::from(s.clips_refused))
+        .kv("clips_failed", u64::from(s.clips_failed))
+        .kv("poses_applied", u64::from(s.poses_applied))
+        .kv("poses_missing", u64::from(s.poses_missing))
+        .kv("poses_stale", u64::from(s.poses_stale))
+        .kv("poses_rejected", u64::from(s.poses_rejected))
+        .kv("held_ticks", u64::from(s.held_ticks))
+        .kv("status_frames", u64::from(s.status_frames))
+        .kv("other_frames", u64::from(s.other_frames))
+        .nl();
+    driver.print_stats("stream_ticks", calibration_ticks, text);
+    text.str("#")
+        .kv("stack_bytes_used", crate::stack::used_bytes() as u64)
+        .nl();
+}
