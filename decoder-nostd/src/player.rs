@@ -65,7 +65,7 @@ pub struct Player<'a, const N: usize> {
     cursor: u32,
     /// Where the `pca-spline` codec is in its segment list.
     #[cfg(feature = "codec-pca-spline")]
-    segment: Cursor,
+    segment: Cursor<'a>,
     /// `index`: the frame `state_frame`; `pca-spline`: its cache of key
     /// intervals (a larger `N` caches more groups).
     state: [i32; N],
