@@ -509,11 +509,12 @@ impl<'a> PcaSplineCodec<'a> {
         self.write_consts(slots.get(consts..consts.wrapping_add(z)), out);
         let mut coef = [0i32; K_MAX];
         for _ in 0..cached {
-            let Some((hd, tail)) = core::mem::take(&mut slots).split_first_chunk_mut::<GROUP_HEAD>()
+            let Some((hd, tail)) =
+                core::mem::take(&mut slots).split_first_chunk_mut::<GROUP_HEAD>()
             else {
                 return;
             };
-            let [rec, dst, data, nkm] = *hd;
+            let [rec, dst, nkm] = *hd;
             let (n, k, ms) = unpack(nkm);
             let Some(target) = self.target(dst, n, out) else {
                 return;
@@ -533,25 +534,22 @@ impl<'a> PcaSplineCodec<'a> {
                 return;
             };
             slots = tail;
-            if !(iv[0] as u32 <= rel && rel < iv[1] as u32) {
-                let rec = rec as usize;
+            let rec = rec as usize;
+            let mut at = Cached::of(iv);
+            if !at.holds(rel) {
                 let mut body = Reader::new(seg.body.get(rec..).unwrap_or(&[]));
                 let Some(group) = read_group(&mut body, n) else {
                     return;
                 };
-                group.fill_slot(rel, iv, controls);
+                at = group.refill(at, rel, iv, controls);
             }
-            let [from, _, span, ra, rb] = *iv;
-            let u = (rel.wrapping_sub(from as u32))
-                .checked_div(span as u32)
-                .unwrap_or(0);
-            let w = spline::weights_at(u, ra, rb);
+            let w = at.weights(rel);
             for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)) {
                 if let Ok(p) = <[i32; 4]>::try_from(p) {
                     *c = spline::apply(w, p);
                 }
             }
-            let data = seg.body.get(data as usize..).unwrap_or(&[]);
+            let data = seg.body.get(rec + 2..).unwrap_or(&[]);
             let (means, basis) = data.split_at_checked(2 * n).unwrap_or((&[], &[]));
             target.write(k, means, basis.get(..n * k).unwrap_or(&[]), ms, &coef);
         }
@@ -580,13 +578,7 @@ impl<'a> PcaSplineCodec<'a> {
                 continue;
             }
             group.coefficients(u64::from(rel), &mut coef);
-            target.write(
-                group.k,
-                group.mean,
-                group.basis,
-                group.mean_shift,
-                &coef,
-            );
+            target.write(group.k, group.mean, group.basis, group.mean_shift, &coef);
         }
     }
 
@@ -645,20 +637,15 @@ impl<'a> PcaSplineCodec<'a> {
             } else {
                 -1 - idx_at as i32
             };
-            *hd = [
-                rec as i32,
-                dst,
-                (rec + 2) as i32,
-                pack(n, group.k, group.mean_shift),
-            ];
+            *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift)];
             if group.k == 0 {
                 let mut values = GroupValues::new(&group, &[]);
                 for v in rest.iter_mut() {
                     *v = values.next().unwrap_or(0);
                 }
-            } else if let [from, to, ..] = rest {
+            } else if let Some((iv, _)) = rest.split_first_chunk_mut::<INTERVAL>() {
                 // An empty interval: the first pose fills it.
-                (*from, *to) = (-1, 0);
+                *iv = Cached::EMPTY;
             }
         }
         // The constants' values too, if they fit after the slots.
@@ -720,10 +707,68 @@ impl<'a> PcaSplineCodec<'a> {
 /// are (−1: not cached).
 const CACHE_HEAD: usize = 4;
 /// Words at the start of every group slot (see `eval`).
-const GROUP_HEAD: usize = 4;
-/// Words of a `k > 0` slot's key interval: `from`, `to` (16.16, `to`
-/// exclusive or `u32::MAX` for the last interval), span, tangent ratios.
-const INTERVAL: usize = 5;
+const GROUP_HEAD: usize = 3;
+/// Words of a `k > 0` slot's key interval (see [`Cached`]).
+const INTERVAL: usize = 3;
+
+/// The key interval a cache slot holds, packed in [`INTERVAL`] words:
+/// `t1 | t2 << 16`, `i | tb << 16`, `(ra − 1) | (rb − 1) << 16` — key
+/// times below 2^15 and tangent ratios in `2..=2^16` (§5.4) fit.
+#[derive(Clone, Copy)]
+struct Cached {
+    /// The interval `i` and its four key times `[ta, t1, t2, tb]`; `ta` is
+    /// not kept (it only enters `ra`).
+    i: u32,
+    t1: u32,
+    t2: u32,
+    tb: u32,
+    ra: i32,
+    rb: i32,
+}
+
+impl Cached {
+    /// Holds no position.
+    const EMPTY: [i32; INTERVAL] = [0xFFFF, 0, 0];
+
+    #[inline(always)]
+    fn of(iv: &[i32; INTERVAL]) -> Self {
+        let [a, b, c] = iv.map(|w| w as u32);
+        Cached {
+            i: b & 0xFFFF,
+            t1: a & 0xFFFF,
+            t2: a >> 16,
+            tb: b >> 16,
+            ra: (c & 0xFFFF) as i32 + 1,
+            rb: (c >> 16) as i32 + 1,
+        }
+    }
+
+    fn store(&self, iv: &mut [i32; INTERVAL]) {
+        *iv = [
+            self.t1 | self.t2 << 16,
+            self.i | self.tb << 16,
+            (self.ra - 1) as u32 | ((self.rb - 1) as u32) << 16,
+        ]
+        .map(|w| w as i32);
+    }
+
+    /// Whether `rel` lies in the interval; the last interval (`tb = t2`)
+    /// also holds its end key.
+    #[inline(always)]
+    fn holds(&self, rel: u32) -> bool {
+        self.t1 << FRAC_BITS <= rel && (rel < self.t2 << FRAC_BITS || self.tb == self.t2)
+    }
+
+    /// The spline weights at `rel` (inside the interval), §5.4.
+    #[inline(always)]
+    fn weights(&self, rel: u32) -> [i32; 4] {
+        let u = rel
+            .wrapping_sub(self.t1 << FRAC_BITS)
+            .checked_div(self.t2.wrapping_sub(self.t1))
+            .unwrap_or(0);
+        spline::weights_at(u, self.ra, self.rb)
+    }
+}
 
 /// `n | k << 18 | ms << 23` (n ≤ 2^17 channels, k ≤ 16, ms ≤ 16).
 fn pack(n: usize, k: usize, ms: u32) -> i32 {
@@ -732,7 +777,11 @@ fn pack(n: usize, k: usize, ms: u32) -> i32 {
 
 fn unpack(nkm: i32) -> (usize, usize, u32) {
     let v = nkm as u32;
-    ((v & 0x3_FFFF) as usize, (v >> 18 & 0x1F) as usize, v >> 23 & 0x1F)
+    (
+        (v & 0x3_FFFF) as usize,
+        (v >> 18 & 0x1F) as usize,
+        v >> 23 & 0x1F,
+    )
 }
 
 /// `pos` relative to the segment's start, clamped into it (at most
@@ -747,9 +796,7 @@ impl GroupHead<'_> {
     /// start): the largest `i <= m - 2` with `t[i] <= rel`, and the four key
     /// times around it with the ends repeated (§5.4).
     fn interval(&self, rel: u64) -> (u32, [u32; 4]) {
-        let time = |i: u32| {
-            BitReader::at(self.bits, u64::from(i) * u64::from(self.time_bits)).read(self.time_bits)
-        };
+        let time = |i: u32| self.time(i);
         let last = self.keys.saturating_sub(1);
         let (mut lo, mut hi) = (0u32, last);
         while hi - lo > 1 {
@@ -770,9 +817,7 @@ impl GroupHead<'_> {
     fn controls(&self, i: u32, mut each: impl FnMut([i32; 4])) {
         let last = self.keys.saturating_sub(1);
         let rows = [i.saturating_sub(1), i, i + 1, (i + 2).min(last)];
-        let base = u64::from(self.keys) * u64::from(self.time_bits);
-        let mut readers = rows
-            .map(|row| BitReader::at(self.bits, base + u64::from(row) * u64::from(self.row_bits)));
+        let mut readers = rows.map(|row| BitReader::at(self.bits, self.key_row(row)));
         let mut comps = Reader::new(self.comps);
         for _ in 0..self.k {
             let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32())
@@ -785,6 +830,31 @@ impl GroupHead<'_> {
                     .each_mut()
                     .map(|r| off.wrapping_add((read_wide(r, wd) as i32).wrapping_shl(sh))),
             );
+        }
+    }
+
+    /// Key time `i`.
+    fn time(&self, i: u32) -> u32 {
+        BitReader::at(self.bits, u64::from(i) * u64::from(self.time_bits)).read(self.time_bits)
+    }
+
+    /// The bit position of key row `row`.
+    fn key_row(&self, row: u32) -> u64 {
+        u64::from(self.keys) * u64::from(self.time_bits) + u64::from(row) * u64::from(self.row_bits)
+    }
+
+    /// Calls `each` with the control value of every component in the key
+    /// row at bit `at`.
+    fn row_values(&self, at: u64, mut each: impl FnMut(i32)) {
+        let mut bits = BitReader::at(self.bits, at);
+        let mut comps = Reader::new(self.comps);
+        for _ in 0..self.k {
+            let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32())
+            else {
+                return;
+            };
+            let v = read_wide(&mut bits, u32::from(wd)) as i32;
+            each(off.wrapping_add(v.wrapping_shl(u32::from(sh))));
         }
     }
 
@@ -803,26 +873,57 @@ impl GroupHead<'_> {
         });
     }
 
-    /// Refills a cache slot's interval and control points for `rel`.
-    fn fill_slot(&self, rel: u32, iv: &mut [i32; INTERVAL], controls: &mut [i32]) {
-        let (i, t) = self.interval(u64::from(rel));
-        let [_, t1, t2, t3] = t;
+    /// Refills a cache slot for `rel`: when `rel` lies in the interval
+    /// after the cached one (sequential playback), the control points shift
+    /// by one key and one key row is read; otherwise the interval is
+    /// searched and its four rows read.
+    fn refill(
+        &self,
+        at: Cached,
+        rel: u32,
+        iv: &mut [i32; INTERVAL],
+        controls: &mut [i32],
+    ) -> Cached {
+        let last = self.keys.saturating_sub(1);
+        let next = at.i + 1;
+        let sequential = at.tb != at.t2
+            && at.t2 << FRAC_BITS <= rel
+            && (rel < at.tb << FRAC_BITS || next + 1 == last)
+            && next < last;
+        let (i, t) = if sequential {
+            let tc = self.time((next + 2).min(last));
+            let row = self.key_row((next + 2).min(last));
+            let mut dst = controls.chunks_exact_mut(4);
+            self.row_values(row, |p| {
+                if let Some([a, b, c, d]) =
+                    dst.next().and_then(|d| <&mut [i32; 4]>::try_from(d).ok())
+                {
+                    [*a, *b, *c, *d] = [*b, *c, *d, p];
+                }
+            });
+            (next, [at.t1, at.t2, at.tb, tc])
+        } else {
+            let (i, t) = self.interval(u64::from(rel));
+            let mut dst = controls.chunks_exact_mut(4);
+            self.controls(i, |p| {
+                if let Some(d) = dst.next() {
+                    d.copy_from_slice(&p);
+                }
+            });
+            (i, t)
+        };
+        let [_, t1, t2, tb] = t;
         let (ra, rb) = spline::ratios(t);
-        // The last interval also holds its end key.
-        let to = if t2 == t3 { u32::MAX } else { t2 << FRAC_BITS };
-        *iv = [
-            (t1 << FRAC_BITS) as i32,
-            to as i32,
-            t2.wrapping_sub(t1) as i32,
+        let cached = Cached {
+            i,
+            t1,
+            t2,
+            tb,
             ra,
             rb,
-        ];
-        let mut dst = controls.chunks_exact_mut(4);
-        self.controls(i, |p| {
-            if let Some(d) = dst.next() {
-                d.copy_from_slice(&p);
-            }
-        });
+        };
+        cached.store(iv);
+        cached
     }
 }
 

@@ -60,13 +60,21 @@ pub(crate) fn weights_at(u: u32, ra: i32, rb: i32) -> [i32; 4] {
     let one = ONE as i32;
     // Wrapping only matters outside the documented ranges (never for a
     // validated clip); it keeps any input panic-free.
-    let h00 = u3.wrapping_mul(2).wrapping_sub(u2.wrapping_mul(3)).wrapping_add(one);
+    let h00 = u3
+        .wrapping_mul(2)
+        .wrapping_sub(u2.wrapping_mul(3))
+        .wrapping_add(one);
     let h10 = u3.wrapping_sub(u2.wrapping_mul(2)).wrapping_add(u);
     let h01 = u2.wrapping_mul(3).wrapping_sub(u3.wrapping_mul(2));
     let h11 = u3.wrapping_sub(u2);
     let x = h10.wrapping_mul(ra) >> FRAC_BITS;
     let y = h11.wrapping_mul(rb) >> FRAC_BITS;
-    [x.wrapping_neg(), h00.wrapping_sub(y), h01.wrapping_add(x), y]
+    [
+        x.wrapping_neg(),
+        h00.wrapping_sub(y),
+        h01.wrapping_add(x),
+        y,
+    ]
 }
 
 fn weights_long(t: [u32; 4], pos: u64) -> [i32; 4] {
@@ -165,7 +173,13 @@ mod tests {
             let (x, y) = ((h10 * ra) >> 16, (h11 * rb) >> 16);
             [-x, h00 - y, h01 + x, y].map(|w| w as i32)
         };
-        for (ra, rb) in [(65536, 65536), (1, 1), (0, 65536), (32768, 21845), (65535, 3)] {
+        for (ra, rb) in [
+            (65536, 65536),
+            (1, 1),
+            (0, 65536),
+            (32768, 21845),
+            (65535, 3),
+        ] {
             for u in 0..=65536u32 {
                 let want = reference(i64::from(u), i64::from(ra), i64::from(rb));
                 assert_eq!(weights_at(u, ra, rb), want, "u {u} ra {ra} rb {rb}");
