@@ -47,10 +47,11 @@ pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
 /// Plays a clip of at most `N` channels.
 ///
 /// State: the codec view (a few slices), a segment cursor and `N` words —
-/// the `index` codec's current frame, or the `pca-spline` codec's cache of
-/// key intervals (`6 + 4k` words per group of `k` components; with less
-/// room the same values are decoded, more slowly) — so
-/// `size_of::<Player<N>>()` is `4·N + 104` bytes on a 32-bit MCU
+/// the `index` codec's current frame, or the `pca-spline` codec's cache:
+/// 4 words, then per group of `n` channels and `k` components `6 + 4k`
+/// words (`3 + n` if `k = 0`), then one word per constant channel; with
+/// less room the same values are decoded, more slowly — so
+/// `size_of::<Player<N>>()` is `4·N + 152` bytes on a 32-bit MCU
 /// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
 #[derive(Clone, Debug)]
@@ -65,7 +66,7 @@ pub struct Player<'a, const N: usize> {
     cursor: u32,
     /// Where the `pca-spline` codec is in its segment list.
     #[cfg(feature = "codec-pca-spline")]
-    segment: Cursor,
+    segment: Cursor<'a>,
     /// `index`: the frame `state_frame`; `pca-spline`: its cache of key
     /// intervals (a larger `N` caches more groups).
     state: [i32; N],

@@ -139,3 +139,92 @@ fn pca_spline_access_orders_agree() {
     player.sample_at(u64::MAX, &mut out).unwrap();
     assert_eq!(&out[..n], &all[(frames as usize - 1) * n..]);
 }
+
+/// Poses from a `Player<N>` at frames and at 50 Hz ticks, visited in a
+/// scrambled order.
+fn scrambled_poses<const N: usize>(clip: &Clip<'_>, visits: &[(bool, u64)]) -> Vec<Vec<i32>> {
+    let mut player = Player::<N>::new(clip).unwrap();
+    let n = player.channel_count();
+    let mut out = vec![0i32; n];
+    visits
+        .iter()
+        .map(|&(frame, at)| {
+            if frame {
+                player.frame(at as u32, &mut out).unwrap();
+            } else {
+                player.sample_at(at, &mut out).unwrap();
+            }
+            out.clone()
+        })
+        .collect()
+}
+
+/// The pca-spline cache (the player's state) only saves work: a player too
+/// small to cache anything, one that caches some groups, and one that
+/// caches everything give the same poses (SPEC.md §6), including blend
+/// windows and patches of a real multi-segment clip.
+#[test]
+fn pca_spline_cache_size_does_not_change_output() {
+    let mut clips = vec![("demo".to_string(), pca_clip())];
+    if let Some(files) = mocap_tests::corpus_files("cmu") {
+        let path = files.iter().find(|p| p.ends_with("05_04.bvh")).unwrap();
+        let m = mocap_encoder::bvh::read_file(path).unwrap();
+        let opts = EncodeOptions {
+            codec: CodecChoice::PcaSpline,
+            bound: Bound::from_specs(&[
+                "50mm".parse::<BoundSpec>().unwrap(),
+                "arms:10mm".parse::<BoundSpec>().unwrap(),
+            ]),
+            metres_per_unit: units::detect(&m).metres(),
+            key_interval: None,
+        };
+        clips.push(("05_04".into(), encode::encode(&m, &opts).unwrap().bytes));
+    }
+    for (name, bytes) in &clips {
+        let clip = Clip::parse(bytes).unwrap();
+        let h = clip.header();
+        let frames = u64::from(h.frame_count());
+        let duration_us = frames * u64::from(h.frame_time_ns()) / 1000;
+        // Sequential frames, then scrambled frames and ticks.
+        let mut visits: Vec<(bool, u64)> = (0..frames).map(|f| (true, f)).collect();
+        let mut x = 7u64;
+        for i in 0..3 * frames {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let tick = (x >> 33) % (duration_us / 20_000 + 2);
+            visits.push(if i % 2 == 0 {
+                (true, (x >> 20) % frames)
+            } else {
+                (false, tick * 20_000 + (x >> 40) % 7)
+            });
+        }
+        let full = scrambled_poses::<4096>(&clip, &visits);
+        // The smallest player (N = channels) caches a few groups at most;
+        // the middle one most groups but not the constants.
+        let (small, middle) = if h.channel_count() <= 42 {
+            (
+                scrambled_poses::<42>(&clip, &visits),
+                scrambled_poses::<64>(&clip, &visits),
+            )
+        } else {
+            (
+                scrambled_poses::<96>(&clip, &visits),
+                scrambled_poses::<140>(&clip, &visits),
+            )
+        };
+        for (i, want) in full.iter().enumerate() {
+            assert_eq!(&small[i], want, "{name}: visit {i} {:?}, small", visits[i]);
+            assert_eq!(
+                &middle[i], want,
+                "{name}: visit {i} {:?}, middle",
+                visits[i]
+            );
+        }
+        let all = clipfile::decode_all(&clip).unwrap();
+        let n = h.channel_count();
+        for f in 0..frames as usize {
+            assert_eq!(&full[f][..], &all[f * n..(f + 1) * n], "{name}: frame {f}");
+        }
+    }
+}

@@ -33,12 +33,22 @@ pub(crate) struct PcaSplineCodec<'a> {
 }
 
 /// Where the player is in the segment list: the byte offsets of the
-/// current and previous segment headers, so sequential playback never
-/// walks the list again.
+/// current and previous segment headers, the current segment itself and
+/// its neighbours' bounds, so a pose inside the current segment reads no
+/// segment header; and where the patch scan stopped.
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Cursor {
+pub(crate) struct Cursor<'a> {
     current: usize,
     previous: Option<usize>,
+    /// The segment at `current`, once located.
+    segment: Option<Segment<'a>>,
+    /// Start of the next segment and end of the previous one.
+    next_start: Option<u32>,
+    prev_end: Option<u32>,
+    /// The patch scan of `segment`: byte offset of the first patch not yet
+    /// passed, and 1 + the frame of the last patch passed (0: none).
+    patch_at: usize,
+    patch_seen: u32,
 }
 
 /// One segment's header and its group data.
@@ -281,24 +291,6 @@ impl<'a> PcaSplineCodec<'a> {
         Some((delta, c, v))
     }
 
-    /// Adds the patches of `seg` at relative frame `frame` times `weight`
-    /// (16.16) to `out` (§5.5).
-    fn apply_patches(&self, seg: &Segment<'a>, frame: u32, weight: i64, out: &mut [i32]) {
-        let mut r = Reader::new(seg.patches);
-        let mut at = 0u32;
-        while let Some((delta, c, v)) = self.read_patch(&mut r) {
-            at = at.wrapping_add(delta);
-            if at > frame {
-                return;
-            }
-            if at == frame {
-                if let Some(o) = out.get_mut(c) {
-                    *o = o.wrapping_add(((i64::from(v) * weight) >> FRAC_BITS) as i32);
-                }
-            }
-        }
-    }
-
     /// The segment whose header starts at byte `at`.
     fn segment_at(&self, at: usize) -> Option<Segment<'a>> {
         let mut r = Reader::new(self.segments.get(at..)?);
@@ -316,264 +308,496 @@ impl<'a> PcaSplineCodec<'a> {
     }
 
     /// Decodes the pose at `pos` (frames, 16.16; at most the last frame)
-    /// into `out`. `cursor` remembers the segment for the next call;
-    /// `cache` (any length, its content is the decoder's own) keeps the
-    /// current key interval of each group of that segment so that poses
-    /// inside one interval skip the bit reading (§6: the output never
-    /// depends on it).
+    /// into `out`. `cursor` remembers the segment and the patch scan for the
+    /// next call; `cache` (any length, its content is the decoder's own)
+    /// keeps each group's record offset and current key interval (control
+    /// points, tangent ratios) so that a pose inside an interval reads no
+    /// bits and parses no varint (§6: the output never depends on it).
     pub(crate) fn decode_at(
         &self,
         pos: u64,
-        cursor: &mut Cursor,
+        cursor: &mut Cursor<'a>,
         out: &mut [i32],
         cache: &mut [i32],
     ) {
         let frame = u32::try_from(pos >> FRAC_BITS).unwrap_or(u32::MAX);
-        let Some((prev, cur, next)) = self.locate(frame, cursor) else {
+        let Some(cur) = self.locate(frame, cursor) else {
             return;
         };
-        self.write_consts(out);
-        // A blend window (§5.2) around the start of `cur` or of `next`:
-        // (earlier, later, which of them is `cur`).
-        let window = match (prev, next) {
-            (Some(p), _) if pos < (u64::from(p.end) + 1) << FRAC_BITS => Some((p, cur, false)),
-            (_, Some(n)) if pos > u64::from(n.start.saturating_sub(1)) << FRAC_BITS => {
-                Some((cur, n, true))
+        self.eval(&cur, pos, out, cache);
+        // A blend window (§5.2) around the start of `cur` or of the next
+        // segment: blend the other segment's values into `out`.
+        if cursor
+            .prev_end
+            .is_some_and(|e| pos < (u64::from(e) + 1) << FRAC_BITS)
+        {
+            if let Some(prev) = cursor.previous.and_then(|p| self.segment_at(p)) {
+                self.blend(&prev, &cur, pos, false, out);
             }
-            _ => None,
-        };
-        match window {
-            None => self.eval(&cur, None, pos, out, cache),
-            Some((a, b, cur_first)) => {
-                // w = (pos - (S - 1)) / (E - S + 2), 16.16, S = b.start,
-                // E = a.end.
-                let from = u64::from(b.start.saturating_sub(1)) << FRAC_BITS;
-                let steps = u64::from(a.end.saturating_add(2).saturating_sub(b.start)).max(1);
-                let w = (pos.saturating_sub(from) / steps).min(1 << FRAC_BITS) as i64;
-                let (cached, other) = if cur_first { (a, b) } else { (b, a) };
-                self.eval(&cached, Some((&other, w, cur_first)), pos, out, cache);
+        } else if cursor
+            .next_start
+            .is_some_and(|s| pos > u64::from(s.saturating_sub(1)) << FRAC_BITS)
+        {
+            if let Some(next) = self.segment_at(cur.next) {
+                self.blend(&cur, &next, pos, true, out);
             }
         }
         // Patches at the two frames around pos, each weighted by its hat
         // function (§5.5).
         let one = 1i64 << FRAC_BITS;
         let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
-        self.apply_patches(&cur, frame.wrapping_sub(cur.start), one - frac, out);
+        let rel = frame.wrapping_sub(cur.start);
+        (cursor.patch_at, cursor.patch_seen) = self.patches_at(
+            &cur,
+            (cursor.patch_at, cursor.patch_seen),
+            rel,
+            one - frac,
+            out,
+        );
         if frac > 0 {
             let after = frame.saturating_add(1);
-            match next {
-                Some(n) if n.start == after => self.apply_patches(&n, 0, frac, out),
-                _ => self.apply_patches(&cur, after.wrapping_sub(cur.start), frac, out),
+            if cursor.next_start == Some(after) {
+                if let Some(next) = self.segment_at(cur.next) {
+                    self.patches_at(&next, (0, 0), 0, frac, out);
+                }
+            } else {
+                (cursor.patch_at, cursor.patch_seen) = self.patches_at(
+                    &cur,
+                    (cursor.patch_at, cursor.patch_seen),
+                    rel.wrapping_add(1),
+                    frac,
+                    out,
+                );
             }
         }
     }
 
-    /// Finds the segment holding `frame` (the last one starting at or
-    /// before it) and its neighbours, moving `cursor`.
-    #[allow(clippy::type_complexity)]
-    fn locate(
-        &self,
-        frame: u32,
-        cursor: &mut Cursor,
-    ) -> Option<(Option<Segment<'a>>, Segment<'a>, Option<Segment<'a>>)> {
-        let mut cur = self.segment_at(cursor.current)?;
+    /// The segment holding `frame` (the last one starting at or before it).
+    /// Inside the cursor's segment this reads nothing; otherwise it walks
+    /// the list from the cursor (or from the start when going back) and
+    /// moves the cursor.
+    fn locate(&self, frame: u32, cursor: &mut Cursor<'a>) -> Option<Segment<'a>> {
+        if let Some(seg) = cursor.segment {
+            if seg.start <= frame && cursor.next_start.is_none_or(|s| frame < s) {
+                return Some(seg);
+            }
+        }
+        let (mut at, mut prev) = (cursor.current, cursor.previous);
+        let mut cur = self.segment_at(at)?;
         if frame < cur.start {
-            *cursor = Cursor::default();
+            (at, prev) = (0, None);
             cur = self.segment_at(0)?;
         }
         loop {
-            let next = self.segment_at(cur.next);
-            match next {
+            match self.segment_at(cur.next) {
                 Some(n) if n.start <= frame => {
-                    cursor.previous = Some(cursor.current);
-                    cursor.current = cur.next;
+                    prev = Some(at);
+                    at = cur.next;
                     cur = n;
                 }
-                _ => {
-                    let prev = cursor.previous.and_then(|p| self.segment_at(p));
-                    return Some((prev, cur, next));
+                next => {
+                    *cursor = Cursor {
+                        current: at,
+                        previous: prev,
+                        segment: Some(cur),
+                        next_start: next.map(|n| n.start),
+                        prev_end: prev.and_then(|p| self.segment_at(p)).map(|p| p.end),
+                        patch_at: 0,
+                        patch_seen: 0,
+                    };
+                    return Some(cur);
                 }
             }
         }
     }
 
-    fn write_consts(&self, out: &mut [i32]) {
+    /// Writes the constant channels, from `cached` (their values in order)
+    /// when the cache holds them, else from the section.
+    fn write_consts(&self, cached: Option<&[i32]>, out: &mut [i32]) {
         let mut r = Reader::new(self.consts);
         let n = self.const_count as usize;
         let indices = Indices::new(r.take(n * self.width()).unwrap_or(&[]), self.wide);
-        for c in indices {
-            let v = r.zigzag_i32().unwrap_or(0);
-            if let Some(o) = out.get_mut(c) {
-                *o = v;
+        match cached {
+            Some(values) => {
+                for (c, &v) in indices.zip(values) {
+                    if let Some(o) = out.get_mut(c) {
+                        *o = v;
+                    }
+                }
+            }
+            None => {
+                for c in indices {
+                    let v = r.zigzag_i32().unwrap_or(0);
+                    if let Some(o) = out.get_mut(c) {
+                        *o = v;
+                    }
+                }
             }
         }
     }
 
-    /// Evaluates every group of `seg` at `pos` (clamped into the segment),
-    /// through the cache; with `other = (segment, w, seg_is_earlier)` each
-    /// channel is the blend of the two segments' values with weight `w` on
-    /// the later one (§5.4 step 4).
-    fn eval(
+    /// The constant channels' values in order.
+    fn const_values(&self) -> impl Iterator<Item = i32> + 'a {
+        let mut r = Reader::new(self.consts);
+        r.take(self.const_count as usize * self.width());
+        (0..self.const_count).map(move |_| r.zigzag_i32().unwrap_or(0))
+    }
+
+    /// Adds the patches of `seg` at relative frame `frame` times `weight`
+    /// (16.16) to `out` (§5.5), scanning from `from` = (byte offset, 1 +
+    /// frame of the last patch before it, 0 for none) unless that is past
+    /// `frame`. Returns where the scan can resume for a later frame.
+    fn patches_at(
         &self,
         seg: &Segment<'a>,
-        other: Option<(&Segment<'a>, i64, bool)>,
-        pos: u64,
+        from: (usize, u32),
+        frame: u32,
+        weight: i64,
         out: &mut [i32],
-        cache: &mut [i32],
-    ) {
-        // cache[0] names the segment the slots belong to (start + 1).
-        let owner = seg.start.wrapping_add(1) as i32;
-        let fresh = cache.first() != Some(&owner);
-        if let Some(c) = cache.first_mut() {
-            *c = owner;
+    ) -> (usize, u32) {
+        let (mut at, mut seen) = if from.1 > frame { (0, 0) } else { from };
+        let mut r = Reader::new(seg.patches.get(at..).unwrap_or(&[]));
+        let base = at;
+        let mut last = seen.saturating_sub(1);
+        while let Some((delta, c, v)) = self.read_patch(&mut r) {
+            let f = last.wrapping_add(delta);
+            if f > frame {
+                break;
+            }
+            if f == frame {
+                if let Some(o) = out.get_mut(c) {
+                    *o = o.wrapping_add(((i64::from(v) * weight) >> FRAC_BITS) as i32);
+                }
+            } else {
+                (at, seen) = (base + r.pos(), f.saturating_add(1));
+            }
+            last = f;
         }
-        let mut slots = cache.get_mut(1..).unwrap_or(&mut []);
+        (at, seen)
+    }
+
+    /// Evaluates every group of `seg` at `pos` (clamped into the segment)
+    /// into `out`, through the cache (§5.4 step 3).
+    ///
+    /// Cache layout: `[owner, groups cached, offset of the first uncached
+    /// record, offset of the constants]`, then one slot per group, in
+    /// order, while they fit, then the constant channels' values if they
+    /// fit. A slot
+    /// starts with [`GROUP_HEAD`] words — the record's offset in the body,
+    /// where the values go (the first channel of a run of consecutive
+    /// channels, or `−1 −` the offset of the group's index list), the
+    /// offset of its means, and `n | k << 18 | ms << 23` — then for `k = 0`
+    /// the `n` channel values, for `k > 0` the key interval it holds
+    /// ([`INTERVAL`] words: `[from, to)` of `rel` in 16.16, `to` being
+    /// `u32::MAX` for the last interval, the span in frames, the tangent
+    /// ratios) and its `4k` control points. Groups without a slot are
+    /// decoded from the record on every pose.
+    fn eval(&self, seg: &Segment<'a>, pos: u64, out: &mut [i32], cache: &mut [i32]) {
         let rel = relative(seg, pos);
+        let (head, mut slots) = cache
+            .split_at_mut_checked(CACHE_HEAD)
+            .unwrap_or((&mut [], &mut []));
+        let owner = seg.start.wrapping_add(1) as i32;
+        if head.first() != Some(&owner) {
+            self.prepare(seg, owner, head, slots);
+        }
+        let (cached, rest, consts) = match *head {
+            [_, g, at, c] => ((g as u32).min(self.group_count), at as usize, c as usize),
+            _ => (0, 0, usize::MAX),
+        };
+        let z = self.const_count as usize;
+        self.write_consts(slots.get(consts..consts.wrapping_add(z)), out);
+        let mut coef = [0i32; K_MAX];
+        for _ in 0..cached {
+            let Some((hd, tail)) =
+                core::mem::take(&mut slots).split_first_chunk_mut::<GROUP_HEAD>()
+            else {
+                return;
+            };
+            let [rec, dst, nkm] = *hd;
+            let (n, k, ms) = unpack(nkm);
+            let Some(target) = self.target(dst, n, out) else {
+                return;
+            };
+            if k == 0 {
+                let Some((values, tail)) = tail.split_at_mut_checked(n) else {
+                    return;
+                };
+                slots = tail;
+                target.copy(values);
+                continue;
+            }
+            let Some((iv, tail)) = tail.split_first_chunk_mut::<INTERVAL>() else {
+                return;
+            };
+            let Some((controls, tail)) = tail.split_at_mut_checked(4 * k) else {
+                return;
+            };
+            slots = tail;
+            let rec = rec as usize;
+            let mut at = Cached::of(iv);
+            if !at.holds(rel) {
+                let mut body = Reader::new(seg.body.get(rec..).unwrap_or(&[]));
+                let Some(group) = read_group(&mut body, n) else {
+                    return;
+                };
+                at = group.refill(at, rel, iv, controls);
+            }
+            let w = at.weights(rel);
+            for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)) {
+                if let Ok(p) = <[i32; 4]>::try_from(p) {
+                    *c = spline::apply(w, p);
+                }
+            }
+            let data = seg.body.get(rec + 2..).unwrap_or(&[]);
+            let (means, basis) = data.split_at_checked(2 * n).unwrap_or((&[], &[]));
+            target.write(k, means, basis.get(..n * k).unwrap_or(&[]), ms, &coef);
+        }
+        if cached == self.group_count {
+            return;
+        }
+        // Groups without a cache slot: parse the record on every pose.
+        let mut g = Reader::new(self.groups);
+        for _ in 0..cached {
+            let n = g.varint_u32().unwrap_or(0) as usize;
+            g.take(n * self.width());
+        }
+        let mut body = Reader::new(seg.body.get(rest..).unwrap_or(&[]));
+        for _ in cached..self.group_count {
+            let n = g.varint_u32().unwrap_or(0) as usize;
+            let idx = g.take(n * self.width()).unwrap_or(&[]);
+            let Some(group) = read_group(&mut body, n) else {
+                return;
+            };
+            let Some(target) = Dst::of(idx, self.wide, out) else {
+                return;
+            };
+            if group.k == 0 {
+                let mut values = GroupValues::new(&group, &[]);
+                target.fill(|| values.next().unwrap_or(0));
+                continue;
+            }
+            group.coefficients(u64::from(rel), &mut coef);
+            target.write(group.k, group.mean, group.basis, group.mean_shift, &coef);
+        }
+    }
+
+    /// Where the values of a cached group go (its slot's `dst` word).
+    fn target<'o>(&self, dst: i32, n: usize, out: &'o mut [i32]) -> Option<Dst<'a, 'o>> {
+        if let Ok(first) = usize::try_from(dst) {
+            return out.get_mut(first..first.checked_add(n)?).map(Dst::Run);
+        }
+        let at = usize::try_from(-1 - i64::from(dst)).ok()?;
+        let idx = self.groups.get(at..at.checked_add(n * self.width())?)?;
+        Some(if self.wide {
+            Dst::Wide(idx, out)
+        } else {
+            Dst::Narrow(idx, out)
+        })
+    }
+
+    /// Fills the cache head and as many group slots as fit for `seg`.
+    fn prepare(&self, seg: &Segment<'a>, owner: i32, head: &mut [i32], slots: &mut [i32]) {
         let mut g = Reader::new(self.groups);
         let mut body = Reader::new(seg.body);
-        let mut body_b = other.map(|(o, _, _)| (Reader::new(o.body), relative(o, pos)));
+        let total = slots.len();
+        let mut free = slots;
+        let mut count = 0i32;
+        for _ in 0..self.group_count {
+            let n = g.varint_u32().unwrap_or(0) as usize;
+            let idx_at = g.pos();
+            let idx = g.take(n * self.width()).unwrap_or(&[]);
+            let rec = body.pos();
+            let mut next = body.clone();
+            let Some(group) = read_group(&mut next, n) else {
+                break;
+            };
+            let size = GROUP_HEAD
+                + if group.k == 0 {
+                    n
+                } else {
+                    INTERVAL + 4 * group.k
+                };
+            let Some((slot, tail)) = core::mem::take(&mut free).split_at_mut_checked(size) else {
+                break;
+            };
+            free = tail;
+            body = next;
+            count += 1;
+            let Some((hd, rest)) = slot.split_first_chunk_mut::<GROUP_HEAD>() else {
+                break;
+            };
+            let width = self.width();
+            let first = idx.get(..width).map_or(usize::MAX, index_of);
+            let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
+            // Indices strictly increase (checked by `parse`): n of them
+            // spanning n values are consecutive.
+            let dst = if last.wrapping_sub(first) == n.wrapping_sub(1) {
+                first as i32
+            } else {
+                -1 - idx_at as i32
+            };
+            *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift)];
+            if group.k == 0 {
+                let mut values = GroupValues::new(&group, &[]);
+                for v in rest.iter_mut() {
+                    *v = values.next().unwrap_or(0);
+                }
+            } else if let Some((iv, _)) = rest.split_first_chunk_mut::<INTERVAL>() {
+                // An empty interval: the first pose fills it.
+                *iv = Cached::EMPTY;
+            }
+        }
+        // The constants' values too, if they fit after the slots.
+        let mut consts = -1;
+        if let Some(dst) = free.get_mut(..self.const_count as usize) {
+            for (d, v) in dst.iter_mut().zip(self.const_values()) {
+                *d = v;
+            }
+            consts = (total - free.len()) as i32;
+        }
+        if let [o, g, at, c] = head {
+            (*o, *g, *at, *c) = (owner, count, body.pos() as i32, consts);
+        }
+    }
+
+    /// Blends the other segment of a window into `out`, which holds the
+    /// values of `cur` (§5.4 step 4): `a + (b − a)·w` with `a` the earlier
+    /// segment's value. `cur_first` says whether `cur` is `earlier`.
+    fn blend(
+        &self,
+        earlier: &Segment<'a>,
+        later: &Segment<'a>,
+        pos: u64,
+        cur_first: bool,
+        out: &mut [i32],
+    ) {
+        // w = (pos - (S - 1)) / (E - S + 2), 16.16, S = later.start,
+        // E = earlier.end.
+        let from = u64::from(later.start.saturating_sub(1)) << FRAC_BITS;
+        let steps = u64::from(earlier.end.saturating_add(2).saturating_sub(later.start)).max(1);
+        let w = (pos.saturating_sub(from) / steps).min(1 << FRAC_BITS) as i64;
+        let other = if cur_first { later } else { earlier };
+        let rel = u64::from(relative(other, pos));
+        let mut g = Reader::new(self.groups);
+        let mut body = Reader::new(other.body);
+        let mut coef = [0i32; K_MAX];
         for _ in 0..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
             let idx = g.take(n * self.width()).unwrap_or(&[]);
-            let k = body.clone().u8().map_or(0, usize::from);
-            let want = if k == 0 { 0 } else { SLOT_HEAD + 4 * k };
-            let (slot, rest) = if slots.len() >= want {
-                let (slot, rest) = core::mem::take(&mut slots).split_at_mut(want);
-                (Some(slot), rest)
-            } else {
-                (None, core::mem::take(&mut slots))
-            };
-            slots = rest;
-            let mut coef = [0i32; K_MAX];
-            let Some(head) = group_at(&mut body, n, rel, &mut coef, slot, fresh) else {
+            let Some(head) = read_group(&mut body, n) else {
                 return;
             };
-            let coef = coef.get(..head.k).unwrap_or(&[]);
-            match &mut body_b {
-                None => {
-                    if self.wide {
-                        reconstruct::<true>(idx, &head, coef, out);
-                    } else {
-                        reconstruct::<false>(idx, &head, coef, out);
-                    }
-                }
-                Some((rb, rel_b)) => {
-                    let mut coef_b = [0i32; K_MAX];
-                    let Some(head_b) = group_at(rb, n, *rel_b, &mut coef_b, None, true) else {
-                        return;
-                    };
-                    let coef_b = coef_b.get(..head_b.k).unwrap_or(&[]);
-                    let (_, w, seg_first) = other.unwrap_or((seg, 0, true));
-                    // (earlier, later) for the blend.
-                    let (ea, la) = if seg_first {
-                        ((&head, coef), (&head_b, coef_b))
-                    } else {
-                        ((&head_b, coef_b), (&head, coef))
-                    };
-                    blend_group(idx, self.wide, ea, la, w, out);
-                }
+            head.coefficients(rel, &mut coef);
+            let mut values = GroupValues::new(&head, coef.get(..head.k).unwrap_or(&[]));
+            for c in Indices::new(idx, self.wide) {
+                let (Some(o), Some(v)) = (out.get_mut(c), values.next()) else {
+                    return;
+                };
+                let (a, b) = if cur_first { (*o, v) } else { (v, *o) };
+                let d = i64::from(b.wrapping_sub(a));
+                *o = a.wrapping_add(((d * w) >> FRAC_BITS) as i32);
             }
         }
     }
 }
 
-/// Header words of a cache slot: interval, record length, four key times.
-const SLOT_HEAD: usize = 6;
+/// Words of the cache head: owner (segment start + 1), groups with a slot,
+/// offset of the first record without one, where the constants' values
+/// are (−1: not cached).
+const CACHE_HEAD: usize = 4;
+/// Words at the start of every group slot (see `eval`).
+const GROUP_HEAD: usize = 3;
+/// Words of a `k > 0` slot's key interval (see [`Cached`]).
+const INTERVAL: usize = 3;
 
-/// `pos` relative to the segment's start, clamped into it.
-fn relative(seg: &Segment<'_>, pos: u64) -> u64 {
+/// The key interval a cache slot holds, packed in [`INTERVAL`] words:
+/// `t1 | t2 << 16`, `i | tb << 16`, `(ra − 1) | (rb − 1) << 16` — key
+/// times below 2^15 and tangent ratios in `2..=2^16` (§5.4) fit.
+#[derive(Clone, Copy)]
+struct Cached {
+    /// The interval `i` and its four key times `[ta, t1, t2, tb]`; `ta` is
+    /// not kept (it only enters `ra`).
+    i: u32,
+    t1: u32,
+    t2: u32,
+    tb: u32,
+    ra: i32,
+    rb: i32,
+}
+
+impl Cached {
+    /// Holds no position.
+    const EMPTY: [i32; INTERVAL] = [0xFFFF, 0, 0];
+
+    #[inline(always)]
+    fn of(iv: &[i32; INTERVAL]) -> Self {
+        let [a, b, c] = iv.map(|w| w as u32);
+        Cached {
+            i: b & 0xFFFF,
+            t1: a & 0xFFFF,
+            t2: a >> 16,
+            tb: b >> 16,
+            ra: (c & 0xFFFF) as i32 + 1,
+            rb: (c >> 16) as i32 + 1,
+        }
+    }
+
+    fn store(&self, iv: &mut [i32; INTERVAL]) {
+        *iv = [
+            self.t1 | self.t2 << 16,
+            self.i | self.tb << 16,
+            (self.ra - 1) as u32 | ((self.rb - 1) as u32) << 16,
+        ]
+        .map(|w| w as i32);
+    }
+
+    /// Whether `rel` lies in the interval; the last interval (`tb = t2`)
+    /// also holds its end key.
+    #[inline(always)]
+    fn holds(&self, rel: u32) -> bool {
+        self.t1 << FRAC_BITS <= rel && (rel < self.t2 << FRAC_BITS || self.tb == self.t2)
+    }
+
+    /// The spline weights at `rel` (inside the interval), §5.4.
+    #[inline(always)]
+    fn weights(&self, rel: u32) -> [i32; 4] {
+        let u = rel
+            .wrapping_sub(self.t1 << FRAC_BITS)
+            .checked_div(self.t2.wrapping_sub(self.t1))
+            .unwrap_or(0);
+        spline::weights_at(u, self.ra, self.rb)
+    }
+}
+
+/// `n | k << 18 | ms << 23` (n ≤ 2^17 channels, k ≤ 16, ms ≤ 16).
+fn pack(n: usize, k: usize, ms: u32) -> i32 {
+    (n as u32 | (k as u32) << 18 | ms << 23) as i32
+}
+
+fn unpack(nkm: i32) -> (usize, usize, u32) {
+    let v = nkm as u32;
+    (
+        (v & 0x3_FFFF) as usize,
+        (v >> 18 & 0x1F) as usize,
+        v >> 23 & 0x1F,
+    )
+}
+
+/// `pos` relative to the segment's start, clamped into it (at most
+/// `(2^15 − 1)·2^16`, so it fits in 32 bits).
+fn relative(seg: &Segment<'_>, pos: u64) -> u32 {
     pos.saturating_sub(u64::from(seg.start) << FRAC_BITS)
-        .min(u64::from(seg.end - seg.start) << FRAC_BITS)
-}
-
-/// Reads the next group record of a segment body and its coefficients at
-/// `rel`. A cache `slot` (6 + 4k words) that holds the interval of `rel`
-/// spares the bit reading; otherwise it is refilled.
-fn group_at<'a>(
-    body: &mut Reader<'a>,
-    n: usize,
-    rel: u64,
-    coef: &mut [i32; K_MAX],
-    slot: Option<&mut [i32]>,
-    fresh: bool,
-) -> Option<GroupHead<'a>> {
-    if let Some(slot) = slot {
-        if !fresh {
-            if let Some(head) = cached(body, n, rel, coef, slot) {
-                return Some(head);
-            }
-        }
-        let start = body.clone();
-        let head = read_group(body, n)?;
-        head.coefficients(rel, coef, Some(slot));
-        if let Some(len) = slot.get_mut(1) {
-            *len = (body.pos() - start.pos()) as i32;
-        }
-        return Some(head);
-    }
-    let head = read_group(body, n)?;
-    head.coefficients(rel, coef, None);
-    Some(head)
-}
-
-/// A cache hit: `rel` lies in the slot's interval. Skips the record and
-/// evaluates the cached control points.
-fn cached<'a>(
-    body: &mut Reader<'a>,
-    n: usize,
-    rel: u64,
-    coef: &mut [i32; K_MAX],
-    slot: &[i32],
-) -> Option<GroupHead<'a>> {
-    let [interval, len, ta, t1, t2, tb] = *slot.get(..SLOT_HEAD)? else {
-        return None;
-    };
-    let t = [ta, t1, t2, tb].map(|t| t as u32);
-    let inside = interval >= 0
-        && u64::from(t[1]) << FRAC_BITS <= rel
-        && (rel < u64::from(t[2]) << FRAC_BITS || t[2] == t[3]);
-    if !inside {
-        return None;
-    }
-    let mut rec = Reader::new(body.clone().take(usize::try_from(len).ok()?)?);
-    let k = usize::from(rec.u8()?);
-    let mean_shift = u32::from(rec.u8()?);
-    let mean = rec.take(n.checked_mul(2)?)?;
-    let basis = rec.take(n.checked_mul(k)?)?;
-    body.take(usize::try_from(len).ok()?)?;
-    let w = spline::weights(t, rel);
-    let controls = slot.get(SLOT_HEAD..)?;
-    for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)).take(k) {
-        if let [a, b, c2, d] = *p {
-            *c = spline::apply(w, [a, b, c2, d]);
-        }
-    }
-    Some(GroupHead {
-        k,
-        mean_shift,
-        mean,
-        basis,
-        keys: 0,
-        time_bits: 0,
-        comps: &[],
-        row_bits: 0,
-        bits: &[],
-    })
+        .min(u64::from(seg.end - seg.start) << FRAC_BITS) as u32
 }
 
 impl GroupHead<'_> {
-    /// The spline's value of every component at `rel` (16.16 frames from
-    /// the segment start), §5.4.
-    fn coefficients(&self, rel: u64, coef: &mut [i32; K_MAX], mut slot: Option<&mut [i32]>) {
-        if self.k == 0 {
-            return;
-        }
-        let m = self.keys;
-        let time = |i: u32| {
-            BitReader::at(self.bits, u64::from(i) * u64::from(self.time_bits)).read(self.time_bits)
-        };
-        // Largest i <= m - 2 with t[i] <= rel.
-        let last = m.saturating_sub(1);
+    /// The key interval holding `rel` (16.16 frames from the segment
+    /// start): the largest `i <= m - 2` with `t[i] <= rel`, and the four key
+    /// times around it with the ends repeated (§5.4).
+    fn interval(&self, rel: u64) -> (u32, [u32; 4]) {
+        let time = |i: u32| self.time(i);
+        let last = self.keys.saturating_sub(1);
         let (mut lo, mut hi) = (0u32, last);
         while hi - lo > 1 {
             let mid = lo + (hi - lo) / 2;
@@ -583,103 +807,283 @@ impl GroupHead<'_> {
                 hi = mid;
             }
         }
-        let i = lo;
+        let rows = [lo.saturating_sub(1), lo, lo + 1, (lo + 2).min(last)];
+        (lo, rows.map(time))
+    }
+
+    /// Calls `each` with the four control values of every component at the
+    /// keys `i − 1 … i + 2` (ends repeated). The four key rows are read in
+    /// lockstep, one component at a time.
+    fn controls(&self, i: u32, mut each: impl FnMut([i32; 4])) {
+        let last = self.keys.saturating_sub(1);
         let rows = [i.saturating_sub(1), i, i + 1, (i + 2).min(last)];
-        let t = rows.map(time);
-        let w = spline::weights(t, rel);
-        if let Some([interval, _, ta, t1, t2, tb]) =
-            slot.as_deref_mut().and_then(|s| s.get_mut(..SLOT_HEAD))
-        {
-            *interval = i as i32;
-            [*ta, *t1, *t2, *tb] = t.map(|t| t as i32);
-        }
-        // The four key rows are read in lockstep, one component at a time.
-        let base = u64::from(m) * u64::from(self.time_bits);
-        let mut readers = rows
-            .map(|row| BitReader::at(self.bits, base + u64::from(row) * u64::from(self.row_bits)));
+        let mut readers = rows.map(|row| BitReader::at(self.bits, self.key_row(row)));
         let mut comps = Reader::new(self.comps);
-        let mut controls = slot
-            .and_then(|s| s.get_mut(SLOT_HEAD..))
-            .unwrap_or(&mut [])
-            .chunks_exact_mut(4);
-        for c in coef.iter_mut().take(self.k) {
+        for _ in 0..self.k {
             let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32())
             else {
                 return;
             };
             let (wd, sh) = (u32::from(wd), u32::from(sh));
-            let p = readers
-                .each_mut()
-                .map(|r| off.wrapping_add((read_wide(r, wd) as i32).wrapping_shl(sh)));
-            if let Some(dst) = controls.next() {
-                dst.copy_from_slice(&p);
+            each(
+                readers
+                    .each_mut()
+                    .map(|r| off.wrapping_add((read_wide(r, wd) as i32).wrapping_shl(sh))),
+            );
+        }
+    }
+
+    /// Key time `i`.
+    fn time(&self, i: u32) -> u32 {
+        BitReader::at(self.bits, u64::from(i) * u64::from(self.time_bits)).read(self.time_bits)
+    }
+
+    /// The bit position of key row `row`.
+    fn key_row(&self, row: u32) -> u64 {
+        u64::from(self.keys) * u64::from(self.time_bits) + u64::from(row) * u64::from(self.row_bits)
+    }
+
+    /// Calls `each` with the control value of every component in the key
+    /// row at bit `at`.
+    fn row_values(&self, at: u64, mut each: impl FnMut(i32)) {
+        let mut bits = BitReader::at(self.bits, at);
+        let mut comps = Reader::new(self.comps);
+        for _ in 0..self.k {
+            let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32())
+            else {
+                return;
+            };
+            let v = read_wide(&mut bits, u32::from(wd)) as i32;
+            each(off.wrapping_add(v.wrapping_shl(u32::from(sh))));
+        }
+    }
+
+    /// The spline's value of every component at `rel` (§5.4).
+    fn coefficients(&self, rel: u64, coef: &mut [i32; K_MAX]) {
+        if self.k == 0 {
+            return;
+        }
+        let (i, t) = self.interval(rel);
+        let w = spline::weights(t, rel);
+        let mut dst = coef.iter_mut();
+        self.controls(i, |p| {
+            if let Some(c) = dst.next() {
+                *c = spline::apply(w, p);
             }
-            *c = spline::apply(w, p);
+        });
+    }
+
+    /// Refills a cache slot for `rel`: when `rel` lies in the interval
+    /// after the cached one (sequential playback), the control points shift
+    /// by one key and one key row is read; otherwise the interval is
+    /// searched and its four rows read.
+    fn refill(
+        &self,
+        at: Cached,
+        rel: u32,
+        iv: &mut [i32; INTERVAL],
+        controls: &mut [i32],
+    ) -> Cached {
+        let last = self.keys.saturating_sub(1);
+        let next = at.i + 1;
+        let sequential = at.tb != at.t2
+            && at.t2 << FRAC_BITS <= rel
+            && (rel < at.tb << FRAC_BITS || next + 1 == last)
+            && next < last;
+        let (i, t) = if sequential {
+            let tc = self.time((next + 2).min(last));
+            let row = self.key_row((next + 2).min(last));
+            let mut dst = controls.chunks_exact_mut(4);
+            self.row_values(row, |p| {
+                if let Some([a, b, c, d]) =
+                    dst.next().and_then(|d| <&mut [i32; 4]>::try_from(d).ok())
+                {
+                    [*a, *b, *c, *d] = [*b, *c, *d, p];
+                }
+            });
+            (next, [at.t1, at.t2, at.tb, tc])
+        } else {
+            let (i, t) = self.interval(u64::from(rel));
+            let mut dst = controls.chunks_exact_mut(4);
+            self.controls(i, |p| {
+                if let Some(d) = dst.next() {
+                    d.copy_from_slice(&p);
+                }
+            });
+            (i, t)
+        };
+        let [_, t1, t2, tb] = t;
+        let (ra, rb) = spline::ratios(t);
+        let cached = Cached {
+            i,
+            t1,
+            t2,
+            tb,
+            ra,
+            rb,
+        };
+        cached.store(iv);
+        cached
+    }
+}
+
+/// Where a group's values go: a run of consecutive channels (written as a
+/// sub-slice of `out`, without per-channel index reads or bounds checks),
+/// or the channels its 1- or 2-byte indices name.
+enum Dst<'i, 'o> {
+    Run(&'o mut [i32]),
+    Narrow(&'i [u8], &'o mut [i32]),
+    Wide(&'i [u8], &'o mut [i32]),
+}
+
+impl<'i, 'o> Dst<'i, 'o> {
+    /// The destination of the channels listed in `idx`.
+    fn of(idx: &'i [u8], wide: bool, out: &'o mut [i32]) -> Option<Self> {
+        let width = if wide { 2 } else { 1 };
+        let n = idx.len() / width;
+        let first = idx.get(..width).map_or(usize::MAX, index_of);
+        let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
+        // Indices strictly increase (checked by `parse`): n of them
+        // spanning n values are consecutive.
+        Some(if last.wrapping_sub(first) == n.wrapping_sub(1) {
+            Dst::Run(out.get_mut(first..=last)?)
+        } else if wide {
+            Dst::Wide(idx, out)
+        } else {
+            Dst::Narrow(idx, out)
+        })
+    }
+
+    /// Writes `value()` to each channel in order.
+    #[inline(always)]
+    fn fill(self, mut value: impl FnMut() -> i32) {
+        self.each(|o, _| *o = value());
+    }
+
+    /// Writes `values` (one per channel).
+    fn copy(self, values: &[i32]) {
+        if let Dst::Run(dst) = self {
+            if let Some(src) = values.get(..dst.len()) {
+                dst.copy_from_slice(src);
+            }
+            return;
+        }
+        let mut v = values.iter();
+        self.fill(|| v.next().copied().unwrap_or(0));
+    }
+
+    /// Calls `f` with each channel's output and its position in the group.
+    #[inline(always)]
+    fn each(self, mut f: impl FnMut(&mut i32, usize)) {
+        match self {
+            Dst::Run(dst) => {
+                for (i, o) in dst.iter_mut().enumerate() {
+                    f(o, i);
+                }
+            }
+            Dst::Narrow(idx, out) => {
+                for (i, &c) in idx.iter().enumerate() {
+                    if let Some(o) = out.get_mut(usize::from(c)) {
+                        f(o, i);
+                    }
+                }
+            }
+            Dst::Wide(idx, out) => {
+                for (i, c) in idx.chunks_exact(2).enumerate() {
+                    if let Some(o) = out.get_mut(index_of(c)) {
+                        f(o, i);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Writes a `k > 0` group: `value = (mean << ms) +
+    /// ((64 + Σ basis·coef) >> 7)` (§5.4) from the `n` means and the `n × k`
+    /// basis. The inner
+    /// loops are specialised for the usual small `k`, so the coefficients
+    /// stay in registers.
+    fn write(self, k: usize, means: &[u8], basis: &[u8], ms: u32, coef: &[i32; K_MAX]) {
+        match k {
+            1 => self.write_k::<1>(means, basis, ms, coef),
+            2 => self.write_k::<2>(means, basis, ms, coef),
+            3 => self.write_k::<3>(means, basis, ms, coef),
+            4 => self.write_k::<4>(means, basis, ms, coef),
+            5 => self.write_k::<5>(means, basis, ms, coef),
+            6 => self.write_k::<6>(means, basis, ms, coef),
+            7 => self.write_k::<7>(means, basis, ms, coef),
+            8 => self.write_k::<8>(means, basis, ms, coef),
+            _ => {
+                let k = k.clamp(1, K_MAX);
+                let coef = coef.get(..k).unwrap_or(&[]);
+                let mut rows = means.chunks_exact(2).zip(basis.chunks_exact(k));
+                self.fill(|| match rows.next() {
+                    Some((m, row)) => channel(mean_of(m), ms, row.iter().zip(coef)),
+                    None => 0,
+                });
+            }
+        }
+    }
+
+    /// [`Dst::write`] for `K` components.
+    fn write_k<const K: usize>(self, means: &[u8], basis: &[u8], ms: u32, coef: &[i32; K_MAX]) {
+        let a: [i32; K] = core::array::from_fn(|j| coef.get(j).copied().unwrap_or(0));
+        let rows = means.chunks_exact(2).zip(basis.chunks_exact(K));
+        let value = |m: &[u8], row: &[u8]| match <&[u8; K]>::try_from(row) {
+            Ok(row) => channel(mean_of(m), ms, row.iter().zip(a.iter())),
+            Err(_) => 0,
+        };
+        match self {
+            Dst::Run(dst) => {
+                for (o, (m, row)) in dst.iter_mut().zip(rows) {
+                    *o = value(m, row);
+                }
+            }
+            Dst::Narrow(idx, out) => {
+                for (&c, (m, row)) in idx.iter().zip(rows) {
+                    if let Some(o) = out.get_mut(usize::from(c)) {
+                        *o = value(m, row);
+                    }
+                }
+            }
+            Dst::Wide(idx, out) => {
+                for (c, (m, row)) in idx.chunks_exact(2).zip(rows) {
+                    if let Some(o) = out.get_mut(index_of(c)) {
+                        *o = value(m, row);
+                    }
+                }
+            }
         }
     }
 }
 
-/// The inner loop: `value = mean << shift + (Σ basis·coef + 64) >> 7`.
+/// One channel: `(mean << ms) + ((64 + Σ b·a) >> 7)`.
 #[inline(always)]
-fn reconstruct<const WIDE: bool>(idx: &[u8], head: &GroupHead<'_>, coef: &[i32], out: &mut [i32]) {
-    let indices = Indices::new(idx, WIDE);
-    let means = head.mean.chunks_exact(2);
-    let k = head.k.max(1);
-    let rows = head.basis.chunks_exact(k);
-    if head.k == 0 {
-        let mut r = Reader::new(head.mean);
-        for c in indices {
-            let m = r.zigzag_i32().unwrap_or(0);
-            if let Some(o) = out.get_mut(c) {
-                *o = m.wrapping_shl(head.mean_shift);
-            }
-        }
-        return;
+fn channel<'x>(mean: i32, ms: u32, terms: impl Iterator<Item = (&'x u8, &'x i32)>) -> i32 {
+    let mut acc: i32 = 1 << (BASIS_SHIFT - 1);
+    for (&b, &a) in terms {
+        acc = acc.wrapping_add(i32::from(b as i8).wrapping_mul(a));
     }
-    for ((c, m), row) in indices.zip(means).zip(rows) {
-        let v = channel_value(head, mean_of(m), row, coef);
-        if let Some(o) = out.get_mut(c) {
-            *o = v;
-        }
+    mean.wrapping_shl(ms).wrapping_add(acc >> BASIS_SHIFT)
+}
+
+/// A 1- or 2-byte little-endian channel index.
+#[inline(always)]
+fn index_of(ix: &[u8]) -> usize {
+    match ix {
+        [lo] => usize::from(*lo),
+        [lo, hi] => usize::from(*lo) | usize::from(*hi) << 8,
+        _ => usize::MAX,
     }
 }
 
 /// One channel's value from a group (row `row` of the basis).
 #[inline(always)]
 fn channel_value(head: &GroupHead<'_>, mean: i32, row: &[u8], coef: &[i32]) -> i32 {
-    let mut acc: i32 = 1 << (BASIS_SHIFT - 1);
-    for (&b, &a) in row.iter().zip(coef) {
-        acc = acc.wrapping_add(i32::from(b as i8).wrapping_mul(a));
-    }
-    mean.wrapping_shl(head.mean_shift)
-        .wrapping_add(acc >> BASIS_SHIFT)
+    channel(mean, head.mean_shift, row.iter().zip(coef))
 }
 
-/// Blends one group of two segments channel by channel: `a + (b − a)·w`.
-fn blend_group(
-    idx: &[u8],
-    wide: bool,
-    (ha, ca): (&GroupHead<'_>, &[i32]),
-    (hb, cb): (&GroupHead<'_>, &[i32]),
-    w: i64,
-    out: &mut [i32],
-) {
-    // Values of a k = 0 group come from varints: decode both sides into
-    // `out` one channel at a time.
-    let mut va = GroupValues::new(ha, ca);
-    let mut vb = GroupValues::new(hb, cb);
-    for c in Indices::new(idx, wide) {
-        let (Some(a), Some(b)) = (va.next(), vb.next()) else {
-            return;
-        };
-        if let Some(o) = out.get_mut(c) {
-            let d = i64::from(b.wrapping_sub(a));
-            *o = a.wrapping_add(((d * w) >> FRAC_BITS) as i32);
-        }
-    }
-}
-
-/// The values of a group's channels in order.
+/// The values of a group's channels in order (`k = 0`: the zigzag means).
 struct GroupValues<'h, 'a> {
     head: &'h GroupHead<'a>,
     coef: &'h [i32],

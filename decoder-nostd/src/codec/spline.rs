@@ -28,23 +28,53 @@ pub fn weights(t: [u32; 4], pos: u64) -> [i32; 4] {
 /// numbers with 32-bit divisions, which Cortex-M3/M4 do in one instruction.
 #[inline]
 fn weights_short(t: [u32; 4], pos: u64) -> [i32; 4] {
-    let [t0, t1, t2, t3] = t;
-    let span = t2 - t1;
+    let [_, t1, t2, _] = t;
     let from = t1 << FRAC_BITS;
     let pos = (pos.min(u64::from(t2) << FRAC_BITS) as u32).max(from);
-    let u = (pos - from) / span;
-    let u2 = ((u64::from(u) * u64::from(u)) >> FRAC_BITS) as i64;
-    let u3 = (u2 * i64::from(u)) >> FRAC_BITS;
-    let u = i64::from(u);
-    let h00 = 2 * u3 - 3 * u2 + ONE;
-    let h10 = u3 - 2 * u2 + u;
-    let h01 = 3 * u2 - 2 * u3;
-    let h11 = u3 - u2;
-    let ra = i64::from((span << FRAC_BITS) / (t2 - t0));
-    let rb = i64::from((span << FRAC_BITS) / (t3 - t1));
-    let x = (h10 * ra) >> FRAC_BITS;
-    let y = (h11 * rb) >> FRAC_BITS;
-    [-x, h00 - y, h01 + x, y].map(|w| w as i32)
+    let (ra, rb) = ratios(t);
+    weights_at((pos - from) / (t2 - t1), ra, rb)
+}
+
+/// The tangent ratios of an interval, `ra = span·2^16 / (t2 − t0)` and
+/// `rb = span·2^16 / (t3 − t1)` (each at most 2^16). They depend on the
+/// key times only, so a player computes them once per interval. Requires
+/// `t0 <= t1 < t2 <= t3 < 2^15`.
+#[inline]
+pub(crate) fn ratios(t: [u32; 4]) -> (i32, i32) {
+    let [t0, t1, t2, t3] = t;
+    let span = t2.wrapping_sub(t1) << FRAC_BITS;
+    let ra = span.checked_div(t2.wrapping_sub(t0)).unwrap_or(0);
+    let rb = span.checked_div(t3.wrapping_sub(t1)).unwrap_or(0);
+    (ra as i32, rb as i32)
+}
+
+/// The four weights at `u` (16.16, `0 <= u <= 2^16`) into the interval,
+/// given its [`ratios`] (each at most 2^16). Within those ranges every
+/// intermediate of §5.4 fits in 32 bits (|h10|, |h11| < 2^14), so this is
+/// the `i64` formula computed in `i32`; the squares use 64-bit products.
+#[inline(always)]
+pub(crate) fn weights_at(u: u32, ra: i32, rb: i32) -> [i32; 4] {
+    let u2 = ((u64::from(u) * u64::from(u)) >> FRAC_BITS) as u32;
+    let u3 = ((u64::from(u2) * u64::from(u)) >> FRAC_BITS) as i32;
+    let (u, u2) = (u as i32, u2 as i32);
+    let one = ONE as i32;
+    // Wrapping only matters outside the documented ranges (never for a
+    // validated clip); it keeps any input panic-free.
+    let h00 = u3
+        .wrapping_mul(2)
+        .wrapping_sub(u2.wrapping_mul(3))
+        .wrapping_add(one);
+    let h10 = u3.wrapping_sub(u2.wrapping_mul(2)).wrapping_add(u);
+    let h01 = u2.wrapping_mul(3).wrapping_sub(u3.wrapping_mul(2));
+    let h11 = u3.wrapping_sub(u2);
+    let x = h10.wrapping_mul(ra) >> FRAC_BITS;
+    let y = h11.wrapping_mul(rb) >> FRAC_BITS;
+    [
+        x.wrapping_neg(),
+        h00.wrapping_sub(y),
+        h01.wrapping_add(x),
+        y,
+    ]
 }
 
 fn weights_long(t: [u32; 4], pos: u64) -> [i32; 4] {
@@ -72,12 +102,11 @@ fn weights_long(t: [u32; 4], pos: u64) -> [i32; 4] {
 }
 
 /// `Σ w·p` rounded back from 16.16, with 64-bit intermediates.
-#[inline]
+#[inline(always)]
 pub fn apply(w: [i32; 4], p: [i32; 4]) -> i32 {
-    let mut acc: i64 = 1 << (FRAC_BITS - 1);
-    for (w, p) in w.iter().zip(p) {
-        acc += i64::from(*w) * i64::from(p);
-    }
+    let [w0, w1, w2, w3] = w.map(i64::from);
+    let [p0, p1, p2, p3] = p.map(i64::from);
+    let acc = (1i64 << (FRAC_BITS - 1)) + w0 * p0 + w1 * p1 + w2 * p2 + w3 * p3;
     (acc >> FRAC_BITS) as i32
 }
 
@@ -130,6 +159,31 @@ mod tests {
             let t = [t0, t1, t2, t3];
             let pos = (u64::from(t1) << 16) + next((u64::from(t2 - t1) << 16) + 1);
             assert_eq!(weights_short(t, pos), weights_long(t, pos), "{t:?} {pos}");
+        }
+    }
+
+    #[test]
+    fn weights_at_is_the_i64_formula() {
+        // §5.4 in i64, for every u and extreme ratios.
+        let reference = |u: i64, ra: i64, rb: i64| {
+            let u2 = (u * u) >> 16;
+            let u3 = (u2 * u) >> 16;
+            let (h00, h10) = (2 * u3 - 3 * u2 + ONE, u3 - 2 * u2 + u);
+            let (h01, h11) = (3 * u2 - 2 * u3, u3 - u2);
+            let (x, y) = ((h10 * ra) >> 16, (h11 * rb) >> 16);
+            [-x, h00 - y, h01 + x, y].map(|w| w as i32)
+        };
+        for (ra, rb) in [
+            (65536, 65536),
+            (1, 1),
+            (0, 65536),
+            (32768, 21845),
+            (65535, 3),
+        ] {
+            for u in 0..=65536u32 {
+                let want = reference(i64::from(u), i64::from(ra), i64::from(rb));
+                assert_eq!(weights_at(u, ra, rb), want, "u {u} ra {ra} rb {rb}");
+            }
         }
     }
 
