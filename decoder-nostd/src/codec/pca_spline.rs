@@ -516,7 +516,7 @@ impl<'a> PcaSplineCodec<'a> {
             };
             let [rec, dst, nkm] = *hd;
             let (n, k, ms) = unpack(nkm);
-            let Some(target) = self.target(dst, n, out) else {
+            let Some(mut target) = self.target(dst, n, out) else {
                 return;
             };
             if k == 0 {
@@ -550,6 +550,13 @@ impl<'a> PcaSplineCodec<'a> {
                 }
             }
             let data = seg.body.get(rec + 2..).unwrap_or(&[]);
+            // A single curve (root translations, heading): one channel, one
+            // component — no loop to set up.
+            if let (Dst::Run([o]), [m0, m1, b, ..], [a, ..], 1) = (&mut target, data, &coef, k) {
+                let mean = i32::from(i16::from_le_bytes([*m0, *m1]));
+                *o = channel(mean, ms, core::iter::once((b, a)));
+                continue;
+            }
             let (means, basis) = data.split_at_checked(2 * n).unwrap_or((&[], &[]));
             target.write(k, means, basis.get(..n * k).unwrap_or(&[]), ms, &coef);
         }
