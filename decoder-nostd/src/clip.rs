@@ -161,6 +161,13 @@ impl<'a> Clip<'a> {
         })?;
         let header = Header::parse(header, header_id == consts::SECTION_HEADER_COMPACT)?;
         let (codec_id, codec) = codec.ok_or(Error::ContainerNoCodec)?;
+        // The servo form of the header describes nothing but a servo count:
+        // only a rig table (which lists every servo) gives it meaning.
+        if header.is_servo_form() && rig.is_none() {
+            return Err(Error::ContainerMissingSection {
+                id: consts::SECTION_RIG,
+            });
+        }
         let rig = rig
             .map(|r| Rig::parse(r, header.channel_count()))
             .transpose()?;

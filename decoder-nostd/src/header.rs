@@ -180,15 +180,38 @@ pub struct Header<'a> {
     joints_at: usize,
     channel_count: u32,
     channels_at: usize,
-    /// Section `0x02` (§3.4) rather than `0x01`.
-    compact: bool,
+    /// Which layout the bytes follow.
+    form: Form,
 }
+
+/// The layout of a header section.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Form {
+    /// Section `0x01`, postcard (§3.1).
+    Full,
+    /// Section `0x02`, compact (§3.4).
+    Compact,
+    /// Section `0x02` starting with a `0` varint: a servo clip's skeleton,
+    /// one unnamed root joint with one `Zrotation` channel per servo and
+    /// no channel ranges (§3.4.1). Nothing of it is stored but the count.
+    Servo,
+}
+
+/// Kind codes of a servo-form joint: one `Zrotation`.
+const SERVO_KINDS: &[u8] = &[consts::kind::Z_ROTATION];
+/// `source_unit_nm` of a servo-form header (millimetres; a servo clip has
+/// no lengths).
+pub const SERVO_SOURCE_UNIT_NM: u32 = 1_000_000;
 
 impl<'a> Header<'a> {
     /// Parses and validates a header section (SPEC.md §3).
     pub(crate) fn parse(bytes: &'a [u8], compact: bool) -> Result<Self, Error> {
         let mut r = Reader::new(bytes);
         let malformed = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
+        if compact && r.clone().varint_u32() == Some(0) {
+            return Self::parse_servo(bytes);
+        }
+        let form = if compact { Form::Compact } else { Form::Full };
         let frame_time_ns = r.varint_u32().ok_or_else(|| malformed(&r))?;
         let frame_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
         let source_unit_nm = r.varint_u32().ok_or_else(|| malformed(&r))?;
@@ -202,7 +225,7 @@ impl<'a> Header<'a> {
         let joints_at = r.pos();
         let mut declared: u32 = 0;
         for index in 0..joint_count {
-            let joint = read_joint(&mut r, compact, index)?;
+            let joint = read_joint(&mut r, form, index)?;
             if let Some(p) = joint.parent {
                 if p >= index {
                     return Err(Error::HeaderParent { joint: index });
@@ -230,7 +253,7 @@ impl<'a> Header<'a> {
         }
         let channels_at = r.pos();
         for channel in 0..channel_count {
-            let (unit, min, max) = read_channel(&mut r, compact)?;
+            let (unit, min, max) = read_channel(&mut r, form)?;
             Unit::from_code(unit).ok_or(Error::HeaderUnit { code: unit })?;
             if min > max {
                 return Err(Error::HeaderRange { channel });
@@ -248,7 +271,38 @@ impl<'a> Header<'a> {
             joints_at,
             channel_count,
             channels_at,
-            compact,
+            form,
+        })
+    }
+
+    /// The servo form of section `0x02` (§3.4.1): `varint 0`, frame time,
+    /// frame count, servo count.
+    fn parse_servo(bytes: &'a [u8]) -> Result<Self, Error> {
+        let mut r = Reader::new(bytes);
+        let malformed = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
+        let marker = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        if marker != 0 {
+            return Err(malformed(&r));
+        }
+        let frame_time_ns = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        let frame_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        if frame_time_ns == 0 || frame_count == 0 {
+            return Err(Error::HeaderTiming);
+        }
+        let servos = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        if !r.is_empty() {
+            return Err(Error::HeaderTrailingBytes);
+        }
+        Ok(Header {
+            bytes,
+            frame_time_ns,
+            frame_count,
+            source_unit_nm: SERVO_SOURCE_UNIT_NM,
+            joint_count: servos,
+            joints_at: r.pos(),
+            channel_count: servos,
+            channels_at: r.pos(),
+            form: Form::Servo,
         })
     }
 
@@ -273,6 +327,12 @@ impl<'a> Header<'a> {
         u64::from(self.frame_count) * u64::from(self.frame_time_ns) / 1000
     }
 
+    /// True for a servo clip's header form (SPEC.md §3.4.1): one unnamed
+    /// root joint with one `Zrotation` channel per servo, no ranges.
+    pub fn is_servo_form(&self) -> bool {
+        self.form == Form::Servo
+    }
+
     /// Number of joints, End Sites included.
     pub fn joint_count(&self) -> usize {
         self.joint_count as usize
@@ -289,7 +349,7 @@ impl<'a> Header<'a> {
             reader: Reader::new(self.bytes.get(self.joints_at..).unwrap_or(&[])),
             left: self.joint_count,
             index: 0,
-            compact: self.compact,
+            form: self.form,
         }
     }
 
@@ -302,7 +362,7 @@ impl<'a> Header<'a> {
             kind_pos: 0,
             table: Reader::new(self.bytes.get(self.channels_at..).unwrap_or(&[])),
             left: self.channel_count,
-            compact: self.compact,
+            form: self.form,
         }
     }
 }
@@ -319,9 +379,19 @@ const COMPACT_RANGE_SHIFT: u32 = 10;
 /// follows from the kind.
 const COMPACT_UNIT_FROM_KIND: u8 = consts::unit::MILLIDEGREE;
 
-fn read_joint<'a>(r: &mut Reader<'a>, compact: bool, index: u32) -> Result<Joint<'a>, Error> {
-    if compact {
-        return read_compact_joint(r, index);
+fn read_joint<'a>(r: &mut Reader<'a>, form: Form, index: u32) -> Result<Joint<'a>, Error> {
+    match form {
+        Form::Full => {}
+        Form::Compact => return read_compact_joint(r, index),
+        Form::Servo => {
+            return Ok(Joint {
+                name: "",
+                parent: None,
+                offset_um: [0; 3],
+                end_site: false,
+                kinds: SERVO_KINDS,
+            })
+        }
     }
     let at = r.pos();
     let name_bytes = r.byte_seq().ok_or(Error::HeaderMalformed { offset: at })?;
@@ -383,9 +453,13 @@ fn read_compact_joint<'a>(r: &mut Reader<'a>, index: u32) -> Result<Joint<'a>, E
     })
 }
 
-fn read_channel(r: &mut Reader<'_>, compact: bool) -> Result<(u8, i32, i32), Error> {
+fn read_channel(r: &mut Reader<'_>, form: Form) -> Result<(u8, i32, i32), Error> {
     let bad = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
-    if compact {
+    if form == Form::Servo {
+        // No ranges stored: the rig table bounds what a servo plays.
+        return Ok((consts::unit::MILLIDEGREE, i32::MIN, i32::MAX));
+    }
+    if form == Form::Compact {
         // Unit from the kind (the caller knows it); bounds in 2^10 units.
         let lo = r.zigzag_i32().ok_or_else(|| bad(r))?;
         let span = r.varint_u32().ok_or_else(|| bad(r))?;
@@ -407,7 +481,7 @@ pub struct JointIter<'a> {
     reader: Reader<'a>,
     left: u32,
     index: u32,
-    compact: bool,
+    form: Form,
 }
 
 impl<'a> Iterator for JointIter<'a> {
@@ -418,7 +492,7 @@ impl<'a> Iterator for JointIter<'a> {
             return None;
         }
         self.left -= 1;
-        let j = read_joint(&mut self.reader, self.compact, self.index).ok();
+        let j = read_joint(&mut self.reader, self.form, self.index).ok();
         self.index += 1;
         j
     }
@@ -433,7 +507,7 @@ pub struct ChannelIter<'a> {
     kind_pos: usize,
     table: Reader<'a>,
     left: u32,
-    compact: bool,
+    form: Form,
 }
 
 impl<'a> Iterator for ChannelIter<'a> {
@@ -462,13 +536,13 @@ impl<'a> Iterator for ChannelIter<'a> {
         let joint = self.current?;
         let code = *joint.kinds.get(self.kind_pos)?;
         self.kind_pos += 1;
-        let (unit, min, max) = read_channel(&mut self.table, self.compact).ok()?;
+        let (unit, min, max) = read_channel(&mut self.table, self.form).ok()?;
         self.left -= 1;
         let kind = ChannelKind::from_code(code)?;
-        let unit = match (self.compact, kind.is_rotation()) {
-            (false, _) => Unit::from_code(unit)?,
-            (true, true) => Unit::Millidegree,
-            (true, false) => Unit::Micrometre,
+        let unit = match (self.form, kind.is_rotation()) {
+            (Form::Full, _) => Unit::from_code(unit)?,
+            (_, true) => Unit::Millidegree,
+            (_, false) => Unit::Micrometre,
         };
         Some(Channel {
             joint: self.joint_index,

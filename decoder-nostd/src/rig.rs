@@ -17,7 +17,30 @@ pub struct Rig<'a> {
     rate_mhz: u32,
     count: u32,
     servos: &'a [u8],
+    /// The compact form (§3.5.1): servos read relative to the previous one.
+    compact: bool,
 }
+
+/// Compact servo flags (SPEC.md §3.5.1).
+mod flag {
+    /// `output` = the previous servo's + 1 (0 for the first); else a varint.
+    pub const OUTPUT_NEXT: u8 = 0x01;
+    /// Angle and pulse range as the previous servo's.
+    pub const SAME_RANGE: u8 = 0x02;
+    /// Angles stored in whole degrees (× 1000).
+    pub const ANGLE_DEG: u8 = 0x04;
+    /// `neutral` = `(pulse_lo + pulse_hi) div 2`; else a varint.
+    pub const MID_NEUTRAL: u8 = 0x08;
+    /// `max_speed` as the previous servo's.
+    pub const SAME_SPEED: u8 = 0x10;
+    /// `max_speed` stored in whole degrees per second (× 1000).
+    pub const SPEED_DEG: u8 = 0x20;
+    /// Every defined bit.
+    pub const ALL: u8 = 0x3F;
+}
+
+/// Millidegrees per degree in the compact form's whole-degree fields.
+const MDEG: i64 = 1000;
 
 /// One servo of a rig.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,7 +110,12 @@ impl<'a> Rig<'a> {
     pub(crate) fn parse(bytes: &'a [u8], channels: usize) -> Result<Self, Error> {
         let bad = |rule| Error::RigMalformed { rule };
         let mut r = Reader::new(bytes);
-        let rate_mhz = r.varint_u32().ok_or(bad("truncated"))?;
+        let mut rate_mhz = r.varint_u32().ok_or(bad("truncated"))?;
+        // A leading 0 (no valid rate) marks the compact form (§3.5.1).
+        let compact = rate_mhz == 0;
+        if compact {
+            rate_mhz = r.varint_u32().ok_or(bad("truncated"))?;
+        }
         let count = r.varint_u32().ok_or(bad("truncated"))?;
         if rate_mhz == 0 {
             return Err(bad("servo rate must be positive"));
@@ -96,8 +124,15 @@ impl<'a> Rig<'a> {
             return Err(bad("one servo per channel"));
         }
         let at = r.pos();
+        let mut prev = None;
         for _ in 0..count {
-            let s = read_servo(&mut r).ok_or(bad("truncated"))?;
+            let s = if compact {
+                read_compact_servo(&mut r, prev.as_ref())
+                    .ok_or(bad("compact servo malformed or truncated"))?
+            } else {
+                read_servo(&mut r).ok_or(bad("truncated"))?
+            };
+            prev = Some(s);
             let (lo, hi) = s.pulse_range_qus();
             if s.angle_lo_mdeg >= s.angle_hi_mdeg
                 || u32::from(lo) < MIN_PULSE_QUS
@@ -115,6 +150,7 @@ impl<'a> Rig<'a> {
             rate_mhz,
             count,
             servos: bytes.get(at..).unwrap_or(&[]),
+            compact,
         })
     }
 
@@ -132,13 +168,26 @@ impl<'a> Rig<'a> {
     pub fn servos(&self) -> impl Iterator<Item = RigServo> + 'a {
         let mut r = Reader::new(self.servos);
         let mut left = self.count;
+        let compact = self.compact;
+        let mut prev: Option<RigServo> = None;
         core::iter::from_fn(move || {
             if left == 0 {
                 return None;
             }
             left -= 1;
-            read_servo(&mut r)
+            let s = if compact {
+                read_compact_servo(&mut r, prev.as_ref())
+            } else {
+                read_servo(&mut r)
+            };
+            prev = s;
+            s
         })
+    }
+
+    /// True for the compact form of the table (SPEC.md §3.5.1).
+    pub fn is_compact(&self) -> bool {
+        self.compact
     }
 }
 
@@ -163,6 +212,74 @@ fn read_servo(r: &mut Reader<'_>) -> Option<RigServo> {
         pulse_hi_qus: pulse(r.varint_u32()?)?,
         neutral_qus: pulse(r.varint_u32()?)?,
         max_speed_mdeg_s: r.varint_u32()?,
+    })
+}
+
+/// One servo of the compact form (SPEC.md §3.5.1); `None` if malformed.
+/// The bounds of the values are checked by the caller as for the full form.
+fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<RigServo> {
+    let flags = r.u8()?;
+    if flags & !flag::ALL != 0 {
+        return None;
+    }
+    let has = |f: u8| flags & f != 0;
+    let output = if has(flag::OUTPUT_NEXT) {
+        match prev {
+            Some(p) => p.output.checked_add(1)?,
+            None => 0,
+        }
+    } else {
+        u16::try_from(r.varint_u32()?).ok()?
+    };
+    let (angle_lo_mdeg, angle_hi_mdeg, pulse_lo_qus, pulse_hi_qus) = if has(flag::SAME_RANGE) {
+        if has(flag::ANGLE_DEG) {
+            return None;
+        }
+        let p = prev?;
+        (
+            p.angle_lo_mdeg,
+            p.angle_hi_mdeg,
+            p.pulse_lo_qus,
+            p.pulse_hi_qus,
+        )
+    } else {
+        let unit = if has(flag::ANGLE_DEG) { MDEG } else { 1 };
+        let lo = i64::from(r.zigzag_i32()?).checked_mul(unit)?;
+        let span = i64::from(r.varint_u32()?).checked_mul(unit)?;
+        let lo32 = i32::try_from(lo).ok()?;
+        let hi32 = i32::try_from(lo.checked_add(span)?).ok()?;
+        let p0 = r.varint_u32()?;
+        let dp = r.zigzag_i32()?;
+        let p1 = i64::from(p0).checked_add(i64::from(dp))?;
+        (lo32, hi32, u16::try_from(p0).ok()?, u16::try_from(p1).ok()?)
+    };
+    let neutral_qus = if has(flag::MID_NEUTRAL) {
+        // Both pulses fit u16, so the sum fits u32.
+        ((u32::from(pulse_lo_qus) + u32::from(pulse_hi_qus)) / 2) as u16
+    } else {
+        u16::try_from(r.varint_u32()?).ok()?
+    };
+    let max_speed_mdeg_s = if has(flag::SAME_SPEED) {
+        if has(flag::SPEED_DEG) {
+            return None;
+        }
+        prev?.max_speed_mdeg_s
+    } else {
+        let v = r.varint_u32()?;
+        if has(flag::SPEED_DEG) {
+            v.checked_mul(MDEG as u32)?
+        } else {
+            v
+        }
+    };
+    Some(RigServo {
+        output,
+        angle_lo_mdeg,
+        angle_hi_mdeg,
+        pulse_lo_qus,
+        pulse_hi_qus,
+        neutral_qus,
+        max_speed_mdeg_s,
     })
 }
 
@@ -192,5 +309,56 @@ mod tests {
         };
         assert_eq!(rev.pulse_qus(45_000), 4000);
         assert_eq!(rev.pulse_qus(i32::MAX), 2000);
+    }
+
+    /// SPEC.md §3.5.1's example: two servos, the second all "as before".
+    const COMPACT: &[u8] = &[
+        0x00, 0xD0, 0x86, 0x03, 0x02, //
+        0x2D, 0x59, 0x5A, 0xA0, 0x1F, 0xC0, 0x3E, 0xAC, 0x02, //
+        0x1B,
+    ];
+
+    #[test]
+    fn compact_table_reads_the_spec_example() {
+        let rig = Rig::parse(COMPACT, 2).unwrap();
+        assert!(rig.is_compact());
+        assert_eq!(rig.rate_mhz(), 50_000);
+        let want = RigServo {
+            output: 0,
+            angle_lo_mdeg: -45_000,
+            angle_hi_mdeg: 45_000,
+            pulse_lo_qus: 4000,
+            pulse_hi_qus: 8000,
+            neutral_qus: 6000,
+            max_speed_mdeg_s: 300_000,
+        };
+        let mut servos = rig.servos();
+        assert_eq!(servos.next(), Some(want));
+        assert_eq!(servos.next(), Some(RigServo { output: 1, ..want }));
+        assert_eq!(servos.next(), None);
+    }
+
+    #[test]
+    fn compact_table_rejects_bad_flags_and_truncation() {
+        assert!(Rig::parse(COMPACT, 3).is_err());
+        for cut in 1..COMPACT.len() {
+            assert!(Rig::parse(&COMPACT[..cut], 2).is_err(), "cut at {cut}");
+        }
+        let with = |at: usize, v: u8| {
+            let mut b = COMPACT.to_vec();
+            b[at] = v;
+            b
+        };
+        // An undefined bit; "as before" on the first servo; ANGLE_DEG with
+        // SAME_RANGE; SPEED_DEG with SAME_SPEED.
+        assert!(Rig::parse(&with(5, 0x6D), 2).is_err());
+        assert!(Rig::parse(&with(5, 0x2B), 2).is_err());
+        assert!(Rig::parse(&with(5, 0x1D), 2).is_err());
+        assert!(Rig::parse(&with(14, 0x1F), 2).is_err());
+        assert!(Rig::parse(&with(14, 0x3B), 2).is_err());
+        // Trailing bytes.
+        let mut long = COMPACT.to_vec();
+        long.push(0x1B);
+        assert!(Rig::parse(&long, 2).is_err());
     }
 }

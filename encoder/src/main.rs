@@ -8,7 +8,7 @@ use mocap_decoder::Clip;
 use mocap_encoder::codec::{index, pca_spline};
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::units::LengthUnit;
-use mocap_encoder::{bench, bvh, clipfile, fixed, generate, metrics, units};
+use mocap_encoder::{bench, bvh, clipfile, fixed, generate, metrics, servo_clip, units};
 
 #[derive(Parser)]
 #[command(
@@ -69,6 +69,15 @@ enum Command {
         /// servo travel.
         #[arg(long)]
         rig: Option<PathBuf>,
+        /// With --rig: code the servo signals at the rig's tick rate
+        /// (`rate_hz`, where the firmware samples them) or at the capture's
+        /// frame rate.
+        #[arg(long, value_enum, default_value = "rig", requires = "rig")]
+        servo_rate: mocap_encoder::servo_clip::ServoRate,
+        /// With --rig: keep the servo names in the clip (players never read
+        /// them; `strip` leaves them out).
+        #[arg(long, value_enum, default_value = "strip", requires = "rig")]
+        servo_names: mocap_encoder::servo_clip::ServoNames,
     },
     /// Decode a .mcb clip into BVH (or the firmware's text format).
     Decode {
@@ -143,9 +152,9 @@ enum Command {
     /// Stream a clip to the firmware's streaming mode (postcard + COBS + CRC frames).
     ///
     /// Writes a `00` and `Hello`, then either the clip in 64-byte `ClipChunk`s and `Play`
-    /// (the firmware plays it from its RAM), or with `--poses` one `Pose` per servo tick of a
-    /// servo clip, decoded here at the rig's rate (`seq` = tick number; the firmware holds the
-    /// last pose over lost ones), then `Stop`. See SPEC.md §8.
+    /// (the firmware plays it from its RAM), repeated `--passes` times, or with `--poses` one
+    /// `Pose` per servo tick of a servo clip, decoded here at the rig's rate (`seq` = tick
+    /// number; the firmware holds the last pose over lost ones), then `Stop`. See SPEC.md §8.
     Send {
         /// Input .mcb clip.
         clip: PathBuf,
@@ -157,6 +166,15 @@ enum Command {
         /// Ask the firmware to loop the clip.
         #[arg(long = "loop", conflicts_with = "poses")]
         looped: bool,
+        /// Send the whole upload (every chunk in order, then `Play`) this many times: a
+        /// carousel for a lossy line without a way back. The firmware keeps each chunk from
+        /// whichever pass brings it intact and starts the clip once it has every chunk and a
+        /// `Play`; a `Play` that comes first is remembered. At 1 % corrupted bytes the demo's
+        /// 22-chunk clip arrives whole with 1 pass never, 8 passes 87 %, 13 passes 99 %
+        /// (BENCHMARKS.md §5). Each pass costs the clip's bytes again.
+        #[arg(long, default_value_t = 1, conflicts_with = "poses",
+              value_parser = clap::value_parser!(u32).range(1..))]
+        passes: u32,
         /// Send live poses (a servo clip's pulses at its rig's rate, paced in real time
         /// unless --fast) instead of uploading the clip.
         #[arg(long)]
@@ -294,13 +312,11 @@ fn encode_servo_clip(
     m: &mocap_encoder::motion::Motion,
     rig_path: &Path,
     metres_per_unit: f64,
-    codec: CodecChoice,
-    bound: Bound,
-    key_interval: Option<u16>,
+    opts: servo_clip::ServoEncodeOptions,
     output: &Path,
 ) -> Result<(), String> {
-    use mocap_encoder::{rig::Rig, servo_clip};
-    if bound.positional() {
+    use mocap_encoder::rig::Rig;
+    if opts.bound.positional() {
         return Err(
             "a servo clip's bound is in degrees of servo travel (e.g. --max-error 0.5deg)".into(),
         );
@@ -309,43 +325,9 @@ fn encode_servo_clip(
     let channels = rig.resolve(&m.skeleton).map_err(|e| e.to_string())?;
     let tracks = rig.servo_tracks(m, &channels, metres_per_unit);
     eprint!("{tracks}");
-    let sm = servo_clip::servo_motion(&rig, &tracks);
-    let opts = EncodeOptions {
-        codec,
-        bound,
-        metres_per_unit: 1e-3,
-        key_interval,
-    };
-    let enc = encode::encode(&sm, &opts)?;
-    let bytes = servo_clip::attach_rig(&enc.bytes, &rig)?;
-    write(output, &bytes)?;
-    let clip = Clip::parse(&bytes).map_err(|e| e.to_string())?;
-    let pulses = servo_clip::decoded_pulses(&clip)?;
-    let errors: Vec<_> = tracks
-        .servos
-        .iter()
-        .zip(&pulses)
-        .map(|(t, p)| mocap_encoder::rig::servo_error(&t.pulses, p))
-        .collect();
-    let max_us = errors.iter().map(|e| e.max_us).fold(0.0, f64::max);
-    let rms_us = (errors.iter().map(|e| e.rms_us * e.rms_us).sum::<f64>()
-        / errors.len().max(1) as f64)
-        .sqrt();
-    let seconds = m.frames() as f64 * m.frame_time;
-    let raw16 = rig.servos.len() * 2 * m.frames();
-    println!(
-        "{}: servo clip, {} servos, {} bytes = {:.0} B/s of show ({:.1}x less than raw 16-bit frames at {:.0} Hz), servo angle max {:.3}°, pulse error max {:.2} µs, RMS {:.2} µs ({})",
-        output.display(),
-        rig.servos.len(),
-        bytes.len(),
-        bytes.len() as f64 / seconds,
-        raw16 as f64 / bytes.len() as f64,
-        1.0 / m.frame_time,
-        enc.metrics.angle_max_deg,
-        max_us,
-        rms_us,
-        bench::codec_name(enc.codec)
-    );
+    let sc = servo_clip::encode_servo_clip(&rig, &tracks, &opts)?;
+    write(output, &sc.bytes)?;
+    print!("{}", servo_clip::report(output, &rig, &tracks, &sc));
     Ok(())
 }
 
@@ -361,6 +343,8 @@ fn run(cli: Cli) -> Result<(), String> {
             key_interval,
             emit,
             rig,
+            servo_rate,
+            servo_names,
         } => {
             let m = bvh::read_file(&input).map_err(|e| e.to_string())?;
             let unit = resolve_units(&unit_arg, &m);
@@ -370,9 +354,13 @@ fn run(cli: Cli) -> Result<(), String> {
                     &m,
                     &rig_path,
                     unit.metres(),
-                    codec,
-                    bound,
-                    key_interval,
+                    servo_clip::ServoEncodeOptions {
+                        codec,
+                        bound,
+                        key_interval,
+                        rate: servo_rate,
+                        names: servo_names,
+                    },
                     &output,
                 );
             }
@@ -579,11 +567,12 @@ fn run(cli: Cli) -> Result<(), String> {
             dest,
             baud,
             looped,
+            passes,
             poses: false,
         } => {
             let bytes = read_clip(&clip)?;
             parse_clip(&clip, &bytes)?;
-            let frames = mocap_encoder::play::clip_frames(&bytes, looped)?;
+            let frames = mocap_encoder::play::clip_frames(&bytes, looped, passes)?;
             // Frame i goes out once the bytes before it have crossed the
             // line: 10 bits per byte on an 8N1 line.
             let before: Vec<usize> = frames
@@ -599,7 +588,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 std::time::Duration::from_secs_f64(before[i] as f64 * 10.0 * bit)
             })?;
             eprintln!(
-                "{}: {} frames, {} bytes",
+                "{}: {passes} pass(es), {} frames, {} bytes",
                 dest.display(),
                 frames.len(),
                 frames.iter().map(Vec::len).sum::<usize>()

@@ -243,19 +243,33 @@ fn hello() -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
-/// The frames `mocap send` writes: `00` and `Hello`, the clip in chunks of
-/// at most [`stream::MAX_CHUNK_LEN`] bytes, then `Play` (SPEC.md §8).
-pub fn clip_frames(clip: &[u8], looped: bool) -> Result<Vec<Vec<u8>>, String> {
+/// The frames `mocap send` writes: `00` and `Hello`, then `passes` times
+/// the clip in chunks of at most [`stream::MAX_CHUNK_LEN`] bytes in order
+/// followed by `Play` (SPEC.md §8). One pass is the plain upload; more
+/// passes are a carousel for a one-way lossy link: the firmware takes each
+/// chunk from whichever pass brings it intact, ignores the copies, and
+/// starts the clip once every chunk has arrived and one `Play` has (a
+/// `Play` before the last missing chunk is remembered), so a `Play` after
+/// every pass both starts the clip as early as possible and survives the
+/// loss of most `Play`s.
+pub fn clip_frames(clip: &[u8], looped: bool, passes: u32) -> Result<Vec<Vec<u8>>, String> {
     let total = u32::try_from(clip.len()).map_err(|_| "clip larger than 4 GB".to_string())?;
-    let mut frames = vec![hello()?];
+    if passes == 0 {
+        return Err("--passes must be at least 1".into());
+    }
+    let mut pass = Vec::new();
     for (i, chunk) in clip.chunks(stream::MAX_CHUNK_LEN).enumerate() {
-        frames.push(frame(&Message::ClipChunk {
+        pass.push(frame(&Message::ClipChunk {
             offset: (i * stream::MAX_CHUNK_LEN) as u32,
             total,
             bytes: chunk,
         })?);
     }
-    frames.push(frame(&Message::Play { loop_: looped })?);
+    pass.push(frame(&Message::Play { loop_: looped })?);
+    let mut frames = vec![hello()?];
+    for _ in 0..passes {
+        frames.extend(pass.iter().cloned());
+    }
     Ok(frames)
 }
 

@@ -5,16 +5,24 @@
 //! angle to its pulse with the servo's limits, so the MCU writes decoded
 //! values straight to its outputs.
 
-use mocap_decoder::{consts, Clip, RigServo};
+use mocap_decoder::{consts, tick_count, tick_us, Clip, RigServo};
 
 use crate::clipfile;
 use crate::container::{assemble, varint, zigzag};
+use crate::encode::{self, Bound, CodecChoice, EncodeOptions};
 use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
 use crate::rig::{Rig, Servo, ServoTracks};
 
 /// The servo signals as a motion: servo `i` is root joint `i` with one
-/// `Zrotation` channel, in degrees of servo travel.
+/// `Zrotation` channel, in degrees of servo travel, at the capture's rate.
 pub fn servo_motion(rig: &Rig, tracks: &ServoTracks) -> Motion {
+    let angles: Vec<&[f64]> = tracks.servos.iter().map(|t| &t.angles[..]).collect();
+    signals_motion(rig, &angles, tracks.frame_time)
+}
+
+/// Servo angles `[servo][frame]` (degrees of travel) as a motion of one
+/// root joint per servo, named after it, with one `Zrotation` channel.
+fn signals_motion(rig: &Rig, angles: &[&[f64]], frame_time: f64) -> Motion {
     let joints = rig
         .servos
         .iter()
@@ -26,17 +34,17 @@ pub fn servo_motion(rig: &Rig, tracks: &ServoTracks) -> Motion {
             end_site: false,
         })
         .collect();
-    let frames = tracks.frames();
-    let n = tracks.servos.len();
+    let n = angles.len();
+    let frames = angles.first().map_or(0, |a| a.len());
     let mut values = vec![0.0; frames * n];
-    for (i, t) in tracks.servos.iter().enumerate() {
-        for (f, a) in t.angles.iter().enumerate() {
-            values[f * n + i] = *a;
+    for (i, a) in angles.iter().enumerate() {
+        for (f, v) in a.iter().enumerate() {
+            values[f * n + i] = *v;
         }
     }
     Motion {
         skeleton: Skeleton { joints },
-        frame_time: tracks.frame_time,
+        frame_time,
         values,
     }
 }
@@ -67,35 +75,117 @@ pub fn rate_mhz(rig: &Rig) -> u32 {
         .clamp(1.0, f64::from(u32::MAX)) as u32
 }
 
-/// The rig section (SPEC.md §3.5).
-pub fn rig_section(rig: &Rig) -> Vec<u8> {
-    let mut out = Vec::new();
+/// Compact rig-table flags (SPEC.md §3.5.1).
+mod flag {
+    pub const OUTPUT_NEXT: u8 = 0x01;
+    pub const SAME_RANGE: u8 = 0x02;
+    pub const ANGLE_DEG: u8 = 0x04;
+    pub const MID_NEUTRAL: u8 = 0x08;
+    pub const SAME_SPEED: u8 = 0x10;
+    pub const SPEED_DEG: u8 = 0x20;
+}
+
+/// The rig section in its compact form (SPEC.md §3.5.1): a leading `0`,
+/// then each servo as flags and only what differs from the previous one.
+pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, String> {
+    let mut out = vec![0];
     varint(&mut out, rate_mhz(rig));
     varint(&mut out, rig.servos.len() as u32);
-    for s in rig.servos.iter().map(table_entry) {
-        out.extend_from_slice(&s.output.to_le_bytes());
-        zigzag(&mut out, s.angle_lo_mdeg);
-        zigzag(&mut out, s.angle_hi_mdeg);
-        varint(&mut out, u32::from(s.pulse_lo_qus));
-        varint(&mut out, u32::from(s.pulse_hi_qus));
-        varint(&mut out, u32::from(s.neutral_qus));
-        varint(&mut out, s.max_speed_mdeg_s);
+    let mut prev: Option<RigServo> = None;
+    for (servo, s) in rig.servos.iter().zip(rig.servos.iter().map(table_entry)) {
+        let at = out.len();
+        out.push(0);
+        let mut flags = 0;
+        let next_output = prev.map_or(Some(0), |p| p.output.checked_add(1));
+        if next_output == Some(s.output) {
+            flags |= flag::OUTPUT_NEXT;
+        } else {
+            varint(&mut out, u32::from(s.output));
+        }
+        let range = |r: &RigServo| {
+            (
+                r.angle_lo_mdeg,
+                r.angle_hi_mdeg,
+                r.pulse_lo_qus,
+                r.pulse_hi_qus,
+            )
+        };
+        if prev.is_some_and(|p| range(&p) == range(&s)) {
+            flags |= flag::SAME_RANGE;
+        } else {
+            let span = u32::try_from(i64::from(s.angle_hi_mdeg) - i64::from(s.angle_lo_mdeg))
+                .ok()
+                .filter(|&v| v > 0)
+                .ok_or_else(|| format!("servo {}: angle range must be increasing", servo.name))?;
+            if s.angle_lo_mdeg % 1000 == 0 && span % 1000 == 0 {
+                flags |= flag::ANGLE_DEG;
+                zigzag(&mut out, s.angle_lo_mdeg / 1000);
+                varint(&mut out, span / 1000);
+            } else {
+                zigzag(&mut out, s.angle_lo_mdeg);
+                varint(&mut out, span);
+            }
+            varint(&mut out, u32::from(s.pulse_lo_qus));
+            zigzag(
+                &mut out,
+                i32::from(s.pulse_hi_qus) - i32::from(s.pulse_lo_qus),
+            );
+        }
+        if u32::from(s.neutral_qus) == (u32::from(s.pulse_lo_qus) + u32::from(s.pulse_hi_qus)) / 2 {
+            flags |= flag::MID_NEUTRAL;
+        } else {
+            varint(&mut out, u32::from(s.neutral_qus));
+        }
+        if prev.is_some_and(|p| p.max_speed_mdeg_s == s.max_speed_mdeg_s) {
+            flags |= flag::SAME_SPEED;
+        } else if s.max_speed_mdeg_s % 1000 == 0 {
+            flags |= flag::SPEED_DEG;
+            varint(&mut out, s.max_speed_mdeg_s / 1000);
+        } else {
+            varint(&mut out, s.max_speed_mdeg_s);
+        }
+        out[at] = flags;
+        prev = Some(s);
+    }
+    Ok(out)
+}
+
+/// The servo form of the compact header (SPEC.md §3.4.1): `varint 0`,
+/// frame time, frame count, servo count — all a player needs of a servo
+/// clip's skeleton when the names are left out.
+pub fn servo_header_section(frame_time_ns: u32, frame_count: u32, servos: u32) -> Vec<u8> {
+    let mut out = Vec::new();
+    for v in [0, frame_time_ns, frame_count, servos] {
+        varint(&mut out, v);
     }
     out
 }
 
-/// `clip` with the rig section added (after the header).
-pub fn attach_rig(clip: &[u8], rig: &Rig) -> Result<Vec<u8>, String> {
+/// `clip` (a coded servo motion) as a servo clip: the rig section added
+/// after the header, and with `names` [`ServoNames::Strip`] the header
+/// replaced by its servo form.
+pub fn attach_rig(clip: &[u8], rig: &Rig, names: ServoNames) -> Result<Vec<u8>, String> {
     let parsed = Clip::parse(clip).map_err(|e| format!("internal error: {e}"))?;
+    let h = parsed.header();
     let mut sections: Vec<(u8, Vec<u8>)> = Vec::new();
     for s in parsed.sections() {
-        sections.push((s.id, s.bytes.to_vec()));
         if s.id == consts::SECTION_HEADER || s.id == consts::SECTION_HEADER_COMPACT {
-            sections.push((consts::SECTION_RIG, rig_section(rig)));
+            if names == ServoNames::Strip {
+                let servos = u32::try_from(h.channel_count()).map_err(|_| "too many servos")?;
+                sections.push((
+                    consts::SECTION_HEADER_COMPACT,
+                    servo_header_section(h.frame_time_ns(), h.frame_count(), servos),
+                ));
+            } else {
+                sections.push((s.id, s.bytes.to_vec()));
+            }
+            sections.push((consts::SECTION_RIG, rig_section(rig)?));
+        } else {
+            sections.push((s.id, s.bytes.to_vec()));
         }
     }
     let bytes = assemble(&sections);
-    Clip::parse(&bytes).map_err(|e| format!("internal error: rig table rejected: {e}"))?;
+    Clip::parse(&bytes).map_err(|e| format!("internal error: servo clip rejected: {e}"))?;
     Ok(bytes)
 }
 
@@ -117,4 +207,311 @@ pub fn decoded_pulses(clip: &Clip<'_>) -> Result<Vec<Vec<u16>>, String> {
                 .collect()
         })
         .collect())
+}
+
+/// The capture clip's frame time in nanoseconds, as its header stores it
+/// (SPEC.md §3.2).
+pub fn frame_time_ns(frame_time: f64) -> u32 {
+    (frame_time * 1e9).round().clamp(1.0, f64::from(u32::MAX)) as u32
+}
+
+/// The servo signals at the rig's ticks (SPEC.md §3.5 timing: `tick_count`
+/// ticks over the capture's duration, tick `i` at `tick_us(i)`): the
+/// capture-rate track interpolated linearly at each tick time, held after
+/// its last frame — exactly what a lossless capture-rate servo clip plays
+/// there with `sample_at`, up to the fixed-point rounding.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TickTracks {
+    /// Servo rate, millihertz.
+    pub rate_mhz: u32,
+    /// Tick times, µs.
+    pub times_us: Vec<u64>,
+    /// Commanded angle per servo per tick, degrees: `[servo][tick]`.
+    pub angles: Vec<Vec<f64>>,
+    /// The rig's pulse for each of those angles, ¼ µs: `[servo][tick]`.
+    pub pulses: Vec<Vec<u16>>,
+}
+
+impl TickTracks {
+    /// Number of ticks.
+    pub fn ticks(&self) -> usize {
+        self.times_us.len()
+    }
+}
+
+/// The capture-rate tracks resampled at the rig's ticks (see
+/// [`TickTracks`]).
+pub fn tick_tracks(rig: &Rig, tracks: &ServoTracks) -> TickTracks {
+    let rate_mhz = rate_mhz(rig);
+    let ft_ns = u64::from(frame_time_ns(tracks.frame_time));
+    let frames = tracks.frames();
+    let duration_us = frames as u64 * ft_ns / 1000;
+    let count = tick_count(duration_us, rate_mhz);
+    let times_us: Vec<u64> = (0..count).map(|i| tick_us(i, rate_mhz)).collect();
+    let angles: Vec<Vec<f64>> = tracks
+        .servos
+        .iter()
+        .map(|t| {
+            times_us
+                .iter()
+                .map(|&us| {
+                    let ns = us.saturating_mul(1000);
+                    let i = (ns / ft_ns) as usize;
+                    if frames == 0 {
+                        return 0.0;
+                    }
+                    if i + 1 >= frames {
+                        return t.angles[frames - 1];
+                    }
+                    let frac = (ns % ft_ns) as f64 / ft_ns as f64;
+                    t.angles[i] + (t.angles[i + 1] - t.angles[i]) * frac
+                })
+                .collect()
+        })
+        .collect();
+    let pulses = rig
+        .servos
+        .iter()
+        .zip(&angles)
+        .map(|(s, a)| a.iter().map(|&x| s.angle_to_quarter_us(x)).collect())
+        .collect();
+    TickTracks {
+        rate_mhz,
+        times_us,
+        angles,
+        pulses,
+    }
+}
+
+/// The tick signals as a servo motion (as [`servo_motion`]) whose frames
+/// are the rig's ticks: frame time `1 / rate`, one frame per tick.
+pub fn tick_motion(rig: &Rig, ticks: &TickTracks) -> Motion {
+    let angles: Vec<&[f64]> = ticks.angles.iter().map(|a| &a[..]).collect();
+    signals_motion(rig, &angles, 1000.0 / f64::from(ticks.rate_mhz))
+}
+
+/// Error of a servo clip where the firmware plays it: `sample_at` at every
+/// tick of `ticks`, against [`TickTracks`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TickError {
+    /// Ticks compared.
+    pub ticks: usize,
+    /// Largest servo-angle error, degrees of travel.
+    pub max_deg: f64,
+    /// Largest pulse error (decoder's mapping against the rig's), µs.
+    pub max_us: f64,
+    /// RMS pulse error over all servos and ticks, µs.
+    pub rms_us: f64,
+}
+
+/// Samples `clip` at every tick of `ticks` and measures it (see
+/// [`TickError`]).
+pub fn tick_error(clip: &Clip<'_>, ticks: &TickTracks) -> Result<TickError, String> {
+    let table = clip.rig().ok_or("not a servo clip (no rig table)")?;
+    let servos: Vec<RigServo> = table.servos().collect();
+    let n = clip.header().channel_count();
+    if n != ticks.angles.len() {
+        return Err("servo count differs from the reference".into());
+    }
+    let samples =
+        clipfile::sample_all(clip, ticks.times_us.iter().copied()).map_err(|e| e.to_string())?;
+    let mut e = TickError {
+        ticks: ticks.ticks(),
+        ..TickError::default()
+    };
+    let mut sum2 = 0.0;
+    for (t, row) in samples.chunks(n.max(1)).enumerate() {
+        for (i, &v) in row.iter().enumerate() {
+            let deg = (f64::from(v) / 1000.0 - ticks.angles[i][t]).abs();
+            e.max_deg = e.max_deg.max(deg);
+            let us =
+                (f64::from(servos[i].pulse_qus(v)) - f64::from(ticks.pulses[i][t])).abs() / 4.0;
+            e.max_us = e.max_us.max(us);
+            sum2 += us * us;
+        }
+    }
+    let count = (n * ticks.ticks()).max(1);
+    e.rms_us = (sum2 / count as f64).sqrt();
+    Ok(e)
+}
+
+/// At which rate a servo clip codes its signals.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ServoRate {
+    /// One frame per servo tick of the rig (`rate_hz`), the only times the
+    /// firmware and `mocap play` sample a servo clip.
+    Rig,
+    /// One frame per frame of the captured motion.
+    Capture,
+}
+
+/// What a servo clip keeps of the servo names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ServoNames {
+    /// No names: servos are channels `0..S` (players never read names).
+    Strip,
+    /// Servo names as the header's joint names.
+    Keep,
+}
+
+/// Options of [`encode_servo_clip`].
+#[derive(Clone, Debug)]
+pub struct ServoEncodeOptions {
+    /// Codec (`Auto`: the smallest).
+    pub codec: CodecChoice,
+    /// Bound in degrees of servo travel.
+    pub bound: Bound,
+    /// Key interval of the index codec.
+    pub key_interval: Option<u16>,
+    /// Coding rate.
+    pub rate: ServoRate,
+    /// Servo names.
+    pub names: ServoNames,
+}
+
+/// A servo clip and where its bytes and errors are.
+#[derive(Clone, Debug)]
+pub struct ServoClip {
+    /// The clip.
+    pub bytes: Vec<u8>,
+    /// Codec used.
+    pub codec: CodecChoice,
+    /// Coded frames and their rate (Hz).
+    pub frames: usize,
+    /// Coded frame rate, Hz.
+    pub frame_rate_hz: f64,
+    /// Largest servo-angle error at the coded frames (the encoder's proof).
+    pub frame_max_deg: f64,
+    /// Pulse error at the coded frames of a capture-rate clip against the
+    /// capture-rate pulses (max, RMS µs); `None` for a rig-rate clip.
+    pub frame_pulse_us: Option<(f64, f64)>,
+    /// Error at the rig's ticks, where it is played (bounded for a rig-rate
+    /// clip, measured against linear interpolation for a capture-rate one).
+    pub ticks: TickError,
+    /// Section ids and lengths, in table order.
+    pub sections: Vec<(u8, usize)>,
+}
+
+/// Encodes a rig's servo tracks as a servo clip (SPEC.md §3.5) whose
+/// angle error is within `opts.bound` at its coded frames and, coded at the
+/// rig's rate, at the rig's ticks (against [`tick_tracks`]).
+pub fn encode_servo_clip(
+    rig: &Rig,
+    tracks: &ServoTracks,
+    opts: &ServoEncodeOptions,
+) -> Result<ServoClip, String> {
+    let bound_deg = opts
+        .bound
+        .angle_deg
+        .ok_or("a servo clip needs a bound in degrees of servo travel (e.g. 0.5deg)")?;
+    let ticks = tick_tracks(rig, tracks);
+    let motion = match opts.rate {
+        ServoRate::Rig => tick_motion(rig, &ticks),
+        ServoRate::Capture => servo_motion(rig, tracks),
+    };
+    // The encoder proves the bound at the coded frames. A rig-rate clip's
+    // frames are the ticks (up to the µs rounding of the tick times), so it
+    // is tightened until the bound also holds at the ticks. A capture-rate
+    // clip is bounded at its frames only: between them the reference is a
+    // convention (linear here, a spline in pca-spline), and its tick error
+    // is reported, not enforced.
+    let mut bound = opts.bound;
+    for _ in 0..8 {
+        let enc = encode::encode(
+            &motion,
+            &EncodeOptions {
+                codec: opts.codec,
+                bound,
+                metres_per_unit: 1e-3,
+                key_interval: opts.key_interval,
+            },
+        )?;
+        let bytes = attach_rig(&enc.bytes, rig, opts.names)?;
+        let clip = Clip::parse(&bytes).map_err(|e| e.to_string())?;
+        let tick = tick_error(&clip, &ticks)?;
+        if opts.rate == ServoRate::Rig && tick.max_deg > bound_deg {
+            bound.angle_deg = Some(bound.angle_deg.unwrap_or(bound_deg) * 0.9);
+            continue;
+        }
+        let frame_pulse_us = match opts.rate {
+            ServoRate::Rig => None,
+            ServoRate::Capture => {
+                let pulses = decoded_pulses(&clip)?;
+                let errors: Vec<_> = tracks
+                    .servos
+                    .iter()
+                    .zip(&pulses)
+                    .map(|(t, p)| crate::rig::servo_error(&t.pulses, p))
+                    .collect();
+                let max = errors.iter().map(|e| e.max_us).fold(0.0, f64::max);
+                let rms = (errors.iter().map(|e| e.rms_us * e.rms_us).sum::<f64>()
+                    / errors.len().max(1) as f64)
+                    .sqrt();
+                Some((max, rms))
+            }
+        };
+        let sections = clip.sections().map(|s| (s.id, s.bytes.len())).collect();
+        return Ok(ServoClip {
+            bytes,
+            codec: enc.codec,
+            frames: motion.frames(),
+            frame_rate_hz: 1.0 / motion.frame_time,
+            frame_max_deg: enc.metrics.angle_max_deg,
+            frame_pulse_us,
+            ticks: tick,
+            sections,
+        });
+    }
+    Err(format!(
+        "could not meet {bound_deg}° at the rig's ticks after tightening"
+    ))
+}
+
+/// Raw 16-bit frames (one `u16` pulse per servo per frame, what Arduino
+/// exporters store) of a show: at the capture's frame rate and at the
+/// rig's tick rate, bytes.
+pub fn raw16_bytes(tracks: &ServoTracks, ticks: &TickTracks) -> (usize, usize) {
+    let s = tracks.servos.len();
+    (2 * s * tracks.frames(), 2 * s * ticks.ticks())
+}
+
+/// The summary `mocap encode --rig` prints.
+pub fn report(output: &std::path::Path, rig: &Rig, tracks: &ServoTracks, sc: &ServoClip) -> String {
+    let ticks = tick_tracks(rig, tracks);
+    let seconds = tracks.frames() as f64 * tracks.frame_time;
+    let (raw_capture, raw_rig) = raw16_bytes(tracks, &ticks);
+    let n = sc.bytes.len() as f64;
+    let sections: Vec<String> = sc
+        .sections
+        .iter()
+        .map(|(id, len)| format!("0x{id:02x} {len}"))
+        .collect();
+    let mut s = format!(
+        "{}: servo clip, {} servos, {} bytes = {:.0} B/s of a {:.2} s show; {:.1}x less than raw 16-bit frames at the capture's {:.0} Hz ({} B), {:.1}x at the rig's {:.0} Hz ({} B); coded at {:.0} Hz ({} frames, {})\n",
+        output.display(),
+        rig.servos.len(),
+        sc.bytes.len(),
+        n / seconds,
+        seconds,
+        raw_capture as f64 / n,
+        1.0 / tracks.frame_time,
+        raw_capture,
+        raw_rig as f64 / n,
+        f64::from(ticks.rate_mhz) / 1000.0,
+        raw_rig,
+        sc.frame_rate_hz,
+        sc.frames,
+        crate::bench::codec_name(sc.codec),
+    );
+    s.push_str(&format!(
+        "  servo angle max {:.3}° at the coded frames, {:.3}° at the {} rig ticks (pulse error max {:.2} µs, RMS {:.2} µs)",
+        sc.frame_max_deg, sc.ticks.max_deg, sc.ticks.ticks, sc.ticks.max_us, sc.ticks.rms_us
+    ));
+    if let Some((max, rms)) = sc.frame_pulse_us {
+        s.push_str(&format!(
+            "; at the capture frames pulse error max {max:.2} µs, RMS {rms:.2} µs"
+        ));
+    }
+    s.push_str(&format!("\n  sections: {}\n", sections.join(", ")));
+    s
 }

@@ -1,15 +1,19 @@
 //! `mocap play` / `mocap send` byte streams: every command parses back,
 //! stays inside the rig's pulse limits and speed, the stream ends at
 //! neutral; corrupt clips are refused or still produce only in-limit
-//! commands; `send` frames reassemble the clip exactly.
+//! commands; `send` frames reassemble the clip exactly, in any order and
+//! from any pass of a carousel (`--passes`).
 
 use std::path::Path;
 
 use mocap_decoder::Clip;
-use mocap_encoder::encode::{self, Bound, CodecChoice, EncodeOptions};
+use mocap_encoder::encode::{Bound, CodecChoice};
 use mocap_encoder::play::{clip_frames, servo_clip_stream, servo_stream, Protocol, ServoStream};
 use mocap_encoder::rig::Rig;
+use mocap_encoder::servo_clip::{ServoEncodeOptions, ServoNames, ServoRate};
 use mocap_encoder::{bvh, servo_clip};
+use mocap_servo::stream::upload::{bitmap_words, Accepted, Play, Upload};
+use mocap_servo::stream::{MAX_CHUNK_LEN, PROTOCOL_VERSION};
 use mocap_servo::{FrameReceiver, Message};
 
 fn root() -> &'static Path {
@@ -98,27 +102,88 @@ fn ssc32_stream_parses_back_within_limits() {
     }
 }
 
-/// The demo's servo clip (`mocap encode --rig`) at `bound_deg`.
+/// The demo's servo clip (`mocap encode --rig`) at `bound_deg`, coded at
+/// the capture's frame rate with the servo names kept; and the rig's
+/// pulses at the capture's frames.
 fn servo_clip_bytes(codec: CodecChoice, bound_deg: f64) -> (Vec<u8>, Rig, Vec<Vec<u16>>) {
+    let (rig, tracks) = demo_tracks();
+    let sc = servo_clip::encode_servo_clip(
+        &rig,
+        &tracks,
+        &servo_options(codec, bound_deg, ServoRate::Capture, ServoNames::Keep),
+    )
+    .unwrap();
+    let pulses = tracks.servos.iter().map(|t| t.pulses.clone()).collect();
+    (sc.bytes, rig, pulses)
+}
+
+fn demo_tracks() -> (Rig, mocap_encoder::rig::ServoTracks) {
     let (_, rig) = demo();
     let m = bvh::read_file(&root().join("assets/animatronic_demo.bvh")).unwrap();
     let channels = rig.resolve(&m.skeleton).unwrap();
     let tracks = rig.servo_tracks(&m, &channels, 0.01);
-    let sm = servo_clip::servo_motion(&rig, &tracks);
-    let opts = EncodeOptions {
+    (rig, tracks)
+}
+
+fn servo_options(
+    codec: CodecChoice,
+    bound_deg: f64,
+    rate: ServoRate,
+    names: ServoNames,
+) -> ServoEncodeOptions {
+    ServoEncodeOptions {
         codec,
         bound: Bound {
             angle_deg: Some(bound_deg),
             position_mm: None,
             arms_mm: None,
         },
-        metres_per_unit: 1e-3,
         key_interval: None,
-    };
-    let enc = encode::encode(&sm, &opts).unwrap();
-    let bytes = servo_clip::attach_rig(&enc.bytes, &rig).unwrap();
-    let pulses = tracks.servos.iter().map(|t| t.pulses.clone()).collect();
-    (bytes, rig, pulses)
+        rate,
+        names,
+    }
+}
+
+/// The default servo clip (`mocap encode --rig`: coded at the rig's ticks,
+/// servo names left out, servo-form header and compact rig table) holds
+/// its bound at every tick where it is played, and is smaller than the
+/// capture-rate clip with names.
+#[test]
+fn rig_rate_servo_clips_hold_the_bound_at_the_ticks() {
+    let (rig, tracks) = demo_tracks();
+    let ticks = servo_clip::tick_tracks(&rig, &tracks);
+    for codec in [CodecChoice::Index, CodecChoice::PcaSpline] {
+        let sc = servo_clip::encode_servo_clip(
+            &rig,
+            &tracks,
+            &servo_options(codec, 0.5, ServoRate::Rig, ServoNames::Strip),
+        )
+        .unwrap();
+        let clip = Clip::parse(&sc.bytes).unwrap();
+        assert!(clip.header().is_servo_form());
+        assert!(clip.rig().unwrap().is_compact());
+        assert_eq!(clip.header().frame_time_ns(), 20_000_000);
+        let e = servo_clip::tick_error(&clip, &ticks).unwrap();
+        assert_eq!(e.ticks, ticks.ticks());
+        assert!(e.max_deg <= 0.5, "{codec:?}: {}°", e.max_deg);
+        // Every servo's table entry is the rig's.
+        let want: Vec<_> = rig.servos.iter().map(servo_clip::table_entry).collect();
+        assert_eq!(clip.rig().unwrap().servos().collect::<Vec<_>>(), want);
+        let capture = servo_clip::encode_servo_clip(
+            &rig,
+            &tracks,
+            &servo_options(codec, 0.5, ServoRate::Capture, ServoNames::Keep),
+        )
+        .unwrap();
+        assert!(
+            sc.bytes.len() < capture.bytes.len(),
+            "{codec:?}: {} B at the rig's rate, {} B at the capture's",
+            sc.bytes.len(),
+            capture.bytes.len()
+        );
+        let s = servo_clip_stream(&clip, Protocol::Maestro, None).unwrap();
+        check_limits(&s, &rig);
+    }
 }
 
 #[test]
@@ -230,7 +295,7 @@ fn corrupt_clips_never_command_outside_limits() {
 #[test]
 fn send_frames_reassemble_the_clip() {
     let (bytes, _) = demo();
-    let frames = clip_frames(&bytes, true).unwrap();
+    let frames = clip_frames(&bytes, true, 1).unwrap();
     let mut rx = FrameReceiver::<{ mocap_servo::stream::MAX_FRAME_LEN }>::new();
     let mut clip = vec![0u8; bytes.len()];
     let (mut chunks, mut hello, mut play) = (0, false, false);
@@ -240,7 +305,7 @@ fn send_frames_reassemble_the_clip() {
         let (msg, after) = rx.feed(rest);
         rest = after;
         match msg {
-            Some(Ok(Message::Hello { version })) => hello = version == 1,
+            Some(Ok(Message::Hello { version })) => hello = version == PROTOCOL_VERSION,
             Some(Ok(Message::ClipChunk {
                 offset,
                 total,
@@ -262,9 +327,112 @@ fn send_frames_reassemble_the_clip() {
 }
 
 #[test]
+fn send_passes_repeat_the_chunks_and_play() {
+    let (bytes, _) = demo();
+    let n = bytes.len().div_ceil(MAX_CHUNK_LEN);
+    let one = clip_frames(&bytes, false, 1).unwrap();
+    let three = clip_frames(&bytes, false, 3).unwrap();
+    assert_eq!(one.len(), 1 + n + 1);
+    assert_eq!(three.len(), 1 + 3 * (n + 1));
+    // `00 Hello` once, then the one-pass upload three times, `Play` after each pass.
+    assert_eq!(three[0], one[0]);
+    for pass in three[1..].chunks(n + 1) {
+        assert_eq!(pass, &one[1..]);
+    }
+    let play: Vec<u8> = {
+        let mut rx = FrameReceiver::<{ mocap_servo::stream::MAX_FRAME_LEN }>::new();
+        let last = one.last().unwrap();
+        let mut m = None;
+        for &b in last {
+            if let Some(Ok(msg)) = rx.push(b) {
+                m = Some(format!("{msg:?}"));
+            }
+        }
+        assert_eq!(m.as_deref(), Some("Play { loop_: false }"));
+        last.clone()
+    };
+    assert_eq!(three[n + 1], play);
+    assert!(clip_frames(&bytes, false, 0).is_err());
+}
+
+/// The chunk frames of `frames` as (offset, total, bytes).
+fn chunks_of(frames: &[Vec<u8>]) -> Vec<(u32, u32, Vec<u8>)> {
+    let mut rx = FrameReceiver::<{ mocap_servo::stream::MAX_FRAME_LEN }>::new();
+    let mut out = Vec::new();
+    for &b in frames.concat().iter() {
+        if let Some(Ok(Message::ClipChunk {
+            offset,
+            total,
+            bytes,
+        })) = rx.push(b)
+        {
+            out.push((offset, total, bytes.to_vec()));
+        }
+    }
+    out
+}
+
+#[test]
+fn carousel_chunks_reassemble_in_any_order_with_losses_and_copies() {
+    const BUFFER: usize = 64 * 1024;
+    let (bytes, _) = demo();
+    let chunks = chunks_of(&clip_frames(&bytes, true, 3).unwrap());
+    let n = bytes.len().div_ceil(MAX_CHUNK_LEN);
+    assert_eq!(chunks.len(), 3 * n);
+    let mut state = 0x1234_5678_9ABC_DEF0u64;
+    let mut next = move || {
+        // xorshift64*
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        state.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    };
+    for round in 0..20 {
+        // Lose about a third of the frames, shuffle the rest; every chunk once at least.
+        let mut order: Vec<usize> = (0..chunks.len())
+            .filter(|&i| i < n && round % 2 == 0 || next() % 3 != 0)
+            .collect();
+        for k in (1..order.len()).rev() {
+            order.swap(k, (next() % (k as u64 + 1)) as usize);
+        }
+        let mut buffer = vec![0u8; BUFFER];
+        let mut upload = Upload::<{ bitmap_words(BUFFER) }>::new();
+        let mut seen = vec![false; n];
+        let mut started = None;
+        for (k, &i) in order.iter().enumerate() {
+            let (offset, total, b) = &chunks[i];
+            let index = *offset as usize / MAX_CHUNK_LEN;
+            let got = upload.accept(&mut buffer, *offset, *total, b).unwrap();
+            assert_eq!(got == Accepted::Duplicate, seen[index], "round {round}");
+            seen[index] = true;
+            if k == order.len() / 2 && !upload.is_complete() {
+                assert_eq!(upload.play(true), Play::Armed);
+            }
+            if let Some(looped) = upload.take_armed() {
+                assert!(looped);
+                started = Some(k);
+            }
+        }
+        if seen.iter().all(|&s| s) {
+            assert_eq!(upload.complete(&buffer), Some(&bytes[..]), "round {round}");
+            Clip::parse(upload.complete(&buffer).unwrap()).unwrap();
+            if started.is_none() {
+                assert_eq!(upload.play(false), Play::Start, "round {round}");
+            }
+        } else {
+            assert!(upload.complete(&buffer).is_none());
+            assert_eq!(
+                upload.received() as usize,
+                seen.iter().filter(|&&s| s).count()
+            );
+        }
+    }
+}
+
+#[test]
 fn send_starts_with_a_flushing_delimiter() {
     let (bytes, _) = demo();
-    let frames = clip_frames(&bytes, false).unwrap();
+    let frames = clip_frames(&bytes, false, 1).unwrap();
     assert_eq!(
         frames[0][0], 0x00,
         "a lone 00 ends whatever the receiver holds"
@@ -278,7 +446,7 @@ fn send_starts_with_a_flushing_delimiter() {
             first.get_or_insert(format!("{m:?}"));
         }
     }
-    assert_eq!(first.as_deref(), Some("Hello { version: 1 }"));
+    assert_eq!(first.as_deref(), Some("Hello { version: 2 }"));
 }
 
 #[test]
@@ -301,7 +469,7 @@ fn send_poses_sends_every_tick_of_the_servo_clip_then_stop() {
     }
     assert_eq!(
         messages.first().map(String::as_str),
-        Some("Hello { version: 1 }")
+        Some("Hello { version: 2 }")
     );
     assert_eq!(messages.last().map(String::as_str), Some("Stop"));
     for (i, (m, pulses)) in messages[1..messages.len() - 1]

@@ -12,11 +12,18 @@
 //!   clip embedded at build time (`MOCAP_CLIP`). A streamed clip must carry the same rig table,
 //!   and live poses are held to its limits by the `Limiter`, whatever the host sends.
 //! - **Upload.** `ClipChunk`s are assembled in a fixed RAM buffer
-//!   ([`crate::board::CLIP_BUFFER_BYTES`]): offset 0 starts an upload of `total` bytes (at most
-//!   the buffer), every further chunk must continue it exactly (same `total`, `offset` = bytes
-//!   so far); anything else is rejected and counted. `Play` parses the complete clip with
-//!   `Clip::parse` (CRC-checked) and plays it from tick 0 at the rig's rate — or refuses it
-//!   (incomplete, corrupt, another rig). A chunk that arrives while a clip plays is rejected.
+//!   ([`crate::board::CLIP_BUFFER_BYTES`]) in any order, by `mocap_servo::stream::upload`'s
+//!   rule (SPEC.md §8.1): the first chunk accepted fixes `total` (at most the buffer); each
+//!   chunk must be the 64-byte-aligned chunk of that clip it claims to be; a bitmap of
+//!   [`BITMAP_WORDS`] words records the chunks received. Copies of a chunk are counted and
+//!   change nothing (`mocap send --passes N` sends every chunk N times); anything inconsistent
+//!   is rejected and counted. `Play` parses the complete clip with `Clip::parse` (CRC-checked)
+//!   and plays it from tick 0 at the rig's rate — or refuses it (corrupt, another rig: the
+//!   upload is then forgotten, so a later pass can bring it again; no upload at all). A `Play`
+//!   that comes while chunks are missing is remembered (state armed) and the clip starts when
+//!   the last missing chunk arrives; `Hello` forgets the upload and the armed `Play`, `Pose` and
+//!   `Stop` the armed `Play`. While a clip plays, chunks are only checked against the upload
+//!   (copies counted as such; the buffer is not written).
 //! - **Live poses.** `Pose.seq` counts the sender's ticks: each pose is one tick towards its
 //!   pulses. A gap in `seq` (lost frames) becomes that many ticks holding the last pose (at most
 //!   [`MAX_HOLD_TICKS`]); a `seq` that is not ahead of the last one (a duplicate or a stale
@@ -24,8 +31,9 @@
 //! - **Stop** (or the end of a clip played without `loop_`, or a decoder error in it) returns
 //!   every servo to neutral at its speed limit; a `Pose`, `Stop` or `Hello` during playback
 //!   interrupts it.
-//! - **Status** frames (`Status { received, dropped, last_seq, state }`, state [`State`]) go back
-//!   in reply to `Hello`, after every `Play` (accepted or refused), every
+//! - **Status** frames (`Status { received, dropped, last_seq, state, chunks }`, state
+//!   [`State`], `chunks` the distinct chunks of the upload) go back in reply to `Hello`, after
+//!   every `Play` (accepted, armed or refused) and when an armed `Play` starts the clip, every
 //!   [`STATUS_EVERY_TICKS`] output ticks, and once the servos are parked after `Stop` or the
 //!   end of a clip. The firmware greets with `Hello` at start-up.
 //!
@@ -37,6 +45,7 @@
 use heapless::Deque;
 use mocap_decoder::{tick_count, tick_us, Clip};
 use mocap_servo::output::ServoOutput;
+use mocap_servo::stream::upload::{bitmap_words, Accepted, Play, Upload};
 use mocap_servo::stream::{
     encode_frame, FrameReceiver, Message, MAX_CHUNK_LEN, MAX_FRAME_LEN, MAX_POSE_SERVOS,
     PROTOCOL_VERSION,
@@ -52,6 +61,9 @@ pub const RING_BYTES: usize = 64;
 pub const STATUS_EVERY_TICKS: u32 = 50;
 /// The most ticks one gap in `Pose.seq` holds the last pose for (1 s at 50 Hz).
 pub const MAX_HOLD_TICKS: u16 = 50;
+/// Words of the upload's chunk bitmap: one bit per 64-byte chunk of the clip buffer (3 words on
+/// the micro:bit, 16 on the LM3S6965, 32 on the MPS2).
+pub const BITMAP_WORDS: usize = bitmap_words(CLIP_BUFFER_BYTES);
 
 /// `Status.state`.
 #[derive(Clone, Copy)]
@@ -67,8 +79,10 @@ pub enum State {
     Playing = 3,
     /// Following live poses.
     Live = 4,
-    /// The last `Play` was refused: clip incomplete, corrupt or for another rig.
+    /// The last `Play` was refused: no upload, or a clip corrupt or for another rig.
     Refused = 5,
+    /// A `Play` came while chunks are missing: the clip starts when the last one arrives.
+    Armed = 6,
 }
 
 /// A received message, copied out of the frame receiver.
@@ -234,48 +248,8 @@ impl Link {
     }
 }
 
-/// The clip being uploaded into the RAM buffer.
-#[derive(Default)]
-struct Upload {
-    /// Bytes announced by the chunk at offset 0 (0: no upload).
-    total: usize,
-    /// Bytes received in order so far.
-    len: usize,
-}
-
-impl Upload {
-    /// Takes a chunk into `buffer` if it continues the upload (or starts one at offset 0).
-    fn accept(&mut self, buffer: &mut [u8], offset: u32, total: u32, bytes: &[u8]) -> bool {
-        let (offset, total) = (offset as usize, total as usize);
-        if offset == 0 {
-            // A new upload; one that cannot fit ends the old one too.
-            *self = Upload::default();
-            if total == 0 || total > buffer.len() {
-                return false;
-            }
-            self.total = total;
-        } else if self.total == 0 || total != self.total || offset != self.len {
-            return false;
-        }
-        let end = self.len + bytes.len();
-        match buffer.get_mut(self.len..end) {
-            Some(slot) if end <= self.total => {
-                slot.copy_from_slice(bytes);
-                self.len = end;
-                true
-            }
-            _ => false,
-        }
-    }
-
-    fn complete<'b>(&self, buffer: &'b [u8]) -> Option<&'b [u8]> {
-        if self.total > 0 && self.len == self.total {
-            buffer.get(..self.total)
-        } else {
-            None
-        }
-    }
-}
+/// The upload into the clip buffer (`mocap_servo::stream::upload`'s rule).
+type Clips = Upload<BITMAP_WORDS>;
 
 /// The session's state and counters.
 struct Session {
@@ -287,8 +261,12 @@ struct Session {
     /// The last pose's pulses (held on a gap).
     targets: [u16; MAX_SERVOS],
     since_status: u32,
+    /// Chunks new to the upload, copies of one received, inconsistent ones.
     chunks_accepted: u32,
+    chunks_duplicate: u32,
     chunks_rejected: u32,
+    /// `Play`s remembered until the upload completes.
+    plays_armed: u32,
     clips_played: u32,
     clips_refused: u32,
     /// Clips the decoder failed on while playing (then parked).
@@ -311,7 +289,9 @@ impl Session {
             targets: [6000; MAX_SERVOS],
             since_status: 0,
             chunks_accepted: 0,
+            chunks_duplicate: 0,
             chunks_rejected: 0,
+            plays_armed: 0,
             clips_played: 0,
             clips_refused: 0,
             clips_failed: 0,
@@ -326,7 +306,7 @@ impl Session {
     }
 
     /// Sends `Status` now.
-    fn status(&mut self, link: &Link, text: &mut Out) -> Result<(), Failure> {
+    fn status(&mut self, link: &Link, upload: &Clips, text: &mut Out) -> Result<(), Failure> {
         send(
             text,
             &Message::Status {
@@ -334,6 +314,7 @@ impl Session {
                 dropped: link.frames.dropped(),
                 last_seq: self.last_seq,
                 state: self.state as u8,
+                chunks: upload.received(),
             },
         )?;
         self.status_frames += 1;
@@ -342,12 +323,44 @@ impl Session {
     }
 
     /// After an output tick: `Status` every [`STATUS_EVERY_TICKS`].
-    fn ticked(&mut self, link: &Link, text: &mut Out) -> Result<(), Failure> {
+    fn ticked(&mut self, link: &Link, upload: &Clips, text: &mut Out) -> Result<(), Failure> {
         self.since_status += 1;
         if self.since_status >= STATUS_EVERY_TICKS {
-            self.status(link, text)?;
+            self.status(link, upload, text)?;
         }
         Ok(())
+    }
+
+    /// A chunk while the buffer is free: taken if new (the upload is then loading, ready or —
+    /// with an armed `Play` — about to play). Returns the armed `Play`'s `loop_` once the
+    /// upload is complete.
+    fn chunk(
+        &mut self,
+        upload: &mut Clips,
+        buffer: &mut [u8],
+        offset: u32,
+        total: u32,
+        bytes: &[u8],
+    ) -> Option<bool> {
+        match upload.accept(buffer, offset, total, bytes) {
+            Ok(Accepted::New) => self.chunks_accepted += 1,
+            Ok(Accepted::Duplicate) => {
+                self.chunks_duplicate += 1;
+                return None;
+            }
+            Err(_) => {
+                self.chunks_rejected += 1;
+                return None;
+            }
+        }
+        self.state = if upload.is_complete() {
+            State::Ready
+        } else if upload.armed().is_some() {
+            State::Armed
+        } else {
+            State::Loading
+        };
+        upload.take_armed()
     }
 
     /// A live pose: ticks holding the last pose for the frames missing before it, then one
@@ -358,6 +371,7 @@ impl Session {
         pulses: &[u16],
         driver: &mut Driver<O, S>,
         link: &Link,
+        upload: &Clips,
         text: &mut Out,
     ) -> Result<(), Failure> {
         if pulses.len() != driver.rig.count() {
@@ -377,7 +391,7 @@ impl Session {
         for _ in 0..missing.min(MAX_HOLD_TICKS) {
             driver.command(&self.targets, ticks::now(), text)?;
             self.held_ticks += 1;
-            self.ticked(link, text)?;
+            self.ticked(link, upload, text)?;
         }
         let start = ticks::now();
         for (t, &p) in self.targets.iter_mut().zip(pulses) {
@@ -388,7 +402,7 @@ impl Session {
         self.live = Some(seq);
         self.last_seq = seq;
         self.state = State::Live;
-        self.ticked(link, text)
+        self.ticked(link, upload, text)
     }
 }
 
@@ -412,12 +426,14 @@ enum Played {
     Failed,
 }
 
-/// Plays `clip` from tick 0 (again and again when `looped`), taking frames between ticks.
+/// Plays `clip` (the upload's) from tick 0 (again and again when `looped`), taking frames
+/// between ticks.
 fn play<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
     clip: &Clip<'_>,
     looped: bool,
     driver: &mut Driver<O, S>,
     link: &mut Link,
+    upload: &Clips,
     session: &mut Session,
     text: &mut Out,
 ) -> Result<Played, Failure> {
@@ -433,14 +449,22 @@ fn play<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
                 Err(Failure::Decoder(..)) => return Ok(Played::Failed),
                 other => other?,
             }
-            session.ticked(link, text)?;
+            session.ticked(link, upload, text)?;
             while let Some(event) = link.poll() {
                 match event {
                     Event::Stop | Event::Pose { .. } | Event::Hello => {
                         return Ok(Played::Interrupted(event))
                     }
-                    // The buffer is the clip being played.
-                    Event::Chunk { .. } => session.chunks_rejected += 1,
+                    // The buffer is the clip being played: checked, never written (the
+                    // upload is complete, so a consistent chunk is a copy).
+                    Event::Chunk {
+                        offset,
+                        total,
+                        bytes,
+                    } => match upload.check(CLIP_BUFFER_BYTES, offset, total, bytes.len()) {
+                        Ok(_) => session.chunks_duplicate += 1,
+                        Err(_) => session.chunks_rejected += 1,
+                    },
                     Event::Play { .. } | Event::Other => session.other_frames += 1,
                 }
             }
@@ -464,12 +488,13 @@ impl Mode for Stream {
     ) -> Result<(), Failure> {
         let mut link = Link::new(Rx::take());
         let mut buffer = [0u8; CLIP_BUFFER_BYTES];
-        let mut upload = Upload::default();
+        let mut upload = Clips::new();
         let mut s = Session::new();
         text.str("# mode=stream")
             .kv("servos", driver.rig.count() as u64)
             .kv("rate_mhz", u64::from(driver.rig.rate_mhz()))
             .kv("clip_buffer_bytes", CLIP_BUFFER_BYTES as u64)
+            .kv("bitmap_words", BITMAP_WORDS as u64)
             .kv("ring_bytes", RING_BYTES as u64)
             .kv("status_every_ticks", u64::from(STATUS_EVERY_TICKS))
             .nl();
@@ -485,67 +510,84 @@ impl Mode for Stream {
                 Some(event) => event,
                 None => link.wait(),
             };
-            match event {
+            // `Some(loop_)`: play the upload now (a `Play`, or the chunk that completes an
+            // upload with an armed `Play`).
+            let start = match event {
                 Event::Hello => {
-                    upload = Upload::default();
+                    upload.reset();
                     s.live = None;
                     if !matches!(s.state, State::Playing | State::Live) {
                         s.state = State::Idle;
                     }
-                    s.status(&link, text)?;
+                    s.status(&link, &upload, text)?;
+                    None
                 }
                 Event::Chunk {
                     offset,
                     total,
                     bytes,
-                } => {
-                    if upload.accept(&mut buffer, offset, total, &bytes) {
-                        s.chunks_accepted += 1;
-                        let complete = upload.complete(&buffer).is_some();
-                        s.state = if complete {
-                            State::Ready
-                        } else {
-                            State::Loading
-                        };
-                    } else {
-                        s.chunks_rejected += 1;
+                } => s.chunk(&mut upload, &mut buffer, offset, total, &bytes),
+                Event::Play { looped } => match upload.play(looped) {
+                    Play::Start => Some(looped),
+                    Play::Armed => {
+                        s.plays_armed += 1;
+                        s.state = State::Armed;
+                        s.status(&link, &upload, text)?;
+                        None
                     }
-                }
-                Event::Play { looped } => {
-                    let clip = upload
-                        .complete(&buffer)
-                        .and_then(|bytes| decoder_glue::parse(bytes).ok())
-                        .filter(|clip| driver.rig.matches(clip));
-                    let Some(clip) = clip else {
+                    Play::NoUpload => {
                         s.clips_refused += 1;
                         s.state = State::Refused;
-                        s.status(&link, text)?;
-                        continue;
-                    };
-                    s.clips_played += 1;
-                    s.state = State::Playing;
-                    s.live = None;
-                    s.status(&link, text)?;
-                    s.state = State::Ready;
-                    match play(&clip, looped, driver, &mut link, &mut s, text)? {
-                        Played::Interrupted(event) => pending = Some(event),
-                        // The clip ended: back to neutral, end of the session.
-                        Played::Ended => break,
-                        Played::Failed => {
-                            s.clips_failed += 1;
-                            break;
-                        }
+                        s.status(&link, &upload, text)?;
+                        None
                     }
+                },
+                Event::Pose { seq, pulses } => {
+                    upload.disarm();
+                    s.pose(seq, &pulses, driver, &link, &upload, text)?;
+                    None
                 }
-                Event::Pose { seq, pulses } => s.pose(seq, &pulses, driver, &link, text)?,
                 Event::Stop => break,
-                Event::Other => s.other_frames += 1,
+                Event::Other => {
+                    s.other_frames += 1;
+                    None
+                }
+            };
+            let Some(looped) = start else {
+                continue;
+            };
+            let clip = upload
+                .complete(&buffer)
+                .and_then(|bytes| decoder_glue::parse(bytes).ok())
+                .filter(|clip| driver.rig.matches(clip));
+            let Some(clip) = clip else {
+                // Corrupt or another rig's: forget it, so that a later pass can refill it.
+                upload.reset();
+                s.clips_refused += 1;
+                s.state = State::Refused;
+                s.status(&link, &upload, text)?;
+                continue;
+            };
+            s.clips_played += 1;
+            s.state = State::Playing;
+            s.live = None;
+            s.status(&link, &upload, text)?;
+            let played = play(&clip, looped, driver, &mut link, &upload, &mut s, text)?;
+            s.state = State::Ready;
+            match played {
+                Played::Interrupted(event) => pending = Some(event),
+                // The clip ended: back to neutral, end of the session.
+                Played::Ended => break,
+                Played::Failed => {
+                    s.clips_failed += 1;
+                    break;
+                }
             }
         }
         s.live = None;
         driver.park(text)?;
         s.state = State::Idle;
-        s.status(&link, text)?;
+        s.status(&link, &upload, text)?;
         report(&link, &s, driver, self.calibration_ticks, text);
         Ok(())
     }
@@ -575,7 +617,9 @@ fn report<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
         .nl();
     text.str("# session")
         .kv("chunks_accepted", u64::from(s.chunks_accepted))
+        .kv("chunks_duplicate", u64::from(s.chunks_duplicate))
         .kv("chunks_rejected", u64::from(s.chunks_rejected))
+        .kv("plays_armed", u64::from(s.plays_armed))
         .kv("clips_played", u64::from(s.clips_played))
         .kv("clips_refused", u64::from(s.clips_refused))
         .kv("clips_failed", u64::from(s.clips_failed))

@@ -30,18 +30,29 @@
 //! | 2   | `Play`      | host → MCU | `loop_: bool`                                           |
 //! | 3   | `Pose`      | host → MCU | `seq: u16`, `pulses: [u16]` (≤ 32, quarter-µs)          |
 //! | 4   | `Stop`      | host → MCU | —                                                       |
-//! | 5   | `Status`    | MCU → host | `received: u32`, `dropped: u32`, `last_seq: u16`, `state: u8` |
+//! | 5   | `Status`    | MCU → host | `received: u32`, `dropped: u32`, `last_seq: u16`, `state: u8`, `chunks: u32` |
 //!
 //! A message is at most [`MAX_MESSAGE_LEN`] bytes (a `Pose` of 32 pulses of
 //! 3-byte varints) and a frame at most [`MAX_FRAME_LEN`] bytes with its
 //! delimiter; `FrameReceiver<{ MAX_FRAME_LEN }>` holds any frame.
+//!
+//! # Upload
+//!
+//! A clip's `ClipChunk`s may arrive in any order and any number of times;
+//! [`upload::Upload`] is the receiving rule (SPEC.md §8.1), shared by the
+//! firmware and the host's tests.
+
+pub mod upload;
 
 use serde::{Deserialize, Serialize};
 
 use crate::Error;
 
 /// Version carried by `Hello`; bumped on any change of this wire format.
-pub const PROTOCOL_VERSION: u8 = 1;
+///
+/// 2: `Status` carries `chunks`, and chunks of an upload may come in any
+/// order and more than once (SPEC.md §8.1). 1: the first version.
+pub const PROTOCOL_VERSION: u8 = 2;
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0x00;
 /// Most bytes one `ClipChunk` carries.
@@ -101,6 +112,9 @@ pub enum Message<'a> {
         last_seq: u16,
         /// Player state, defined by the firmware.
         state: u8,
+        /// Distinct chunks of the current upload received (0: no upload);
+        /// the clip has `total.div_ceil(64)`.
+        chunks: u32,
     },
 }
 
@@ -324,7 +338,7 @@ mod tests {
         );
     }
 
-    fn every_message() -> [Message<'static>; 8] {
+    fn every_message() -> [Message<'static>; 9] {
         static CLIP: [u8; MAX_CHUNK_LEN] = [0xA5; MAX_CHUNK_LEN];
         [
             Message::Hello {
@@ -349,6 +363,14 @@ mod tests {
                 dropped: 3,
                 last_seq: 65_535,
                 state: 2,
+                chunks: 22,
+            },
+            Message::Status {
+                received: u32::MAX,
+                dropped: u32::MAX,
+                last_seq: u16::MAX,
+                state: u8::MAX,
+                chunks: u32::MAX,
             },
         ]
     }
@@ -387,19 +409,30 @@ mod tests {
             MAX_MESSAGE_LEN
         );
         assert_eq!(MAX_FRAME_LEN, 107);
+        // The longest Status (every varint at its widest) is far shorter.
+        let status = Message::Status {
+            received: u32::MAX,
+            dropped: u32::MAX,
+            last_seq: u16::MAX,
+            state: u8::MAX,
+            chunks: u32::MAX,
+        };
+        assert_eq!(postcard::to_slice(&status, &mut payload).unwrap().len(), 20);
+        let mut wire = [0u8; MAX_FRAME_LEN];
+        assert_eq!(encode_frame(&status, &mut wire), Ok(26));
     }
 
     /// Spec examples: the exact bytes of a frame of each small message.
     /// CRCs cross-checked with zlib's crc32 (same CRC-32/ISO-HDLC).
     #[test]
     fn frames_match_the_spec_examples() {
-        let cases: [(Message<'static>, &[u8]); 4] = [
+        let cases: [(Message<'static>, &[u8]); 5] = [
             // message 04, CRC 0xD56F2B94
             (Message::Stop, &[0x06, 0x04, 0x94, 0x2B, 0x6F, 0xD5, 0x00]),
-            // message 00 01, CRC 0x36DE2269
+            // message 00 02, CRC 0xAFD773D3 (version 1 was 01 06 01 69 22 de 36 00)
             (
-                Message::Hello { version: 1 },
-                &[0x01, 0x06, 0x01, 0x69, 0x22, 0xDE, 0x36, 0x00],
+                Message::Hello { version: 2 },
+                &[0x01, 0x06, 0x02, 0xD3, 0x73, 0xD7, 0xAF, 0x00],
             ),
             // message 02 00, CRC 0x73EF707D
             (
@@ -411,6 +444,20 @@ mod tests {
                 pose(1, &[6000]),
                 &[
                     0x0A, 0x03, 0x01, 0x01, 0xF0, 0x2E, 0xED, 0x6C, 0x96, 0xF0, 0x00,
+                ],
+            ),
+            // message 05 18 00 00 02 16 (received 24, dropped 0, last_seq 0, state 2 ready,
+            // chunks 22), CRC 0x777D3B80
+            (
+                Message::Status {
+                    received: 24,
+                    dropped: 0,
+                    last_seq: 0,
+                    state: 2,
+                    chunks: 22,
+                },
+                &[
+                    0x03, 0x05, 0x18, 0x01, 0x07, 0x02, 0x16, 0x80, 0x3B, 0x7D, 0x77, 0x00,
                 ],
             ),
         ];

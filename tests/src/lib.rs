@@ -133,22 +133,24 @@ pub fn data_lines(uart: &str) -> String {
 /// assets/rigs/animatronic_demo.toml --codec pca-spline --max-error 0.5deg`),
 /// written to `target/qemu-parity/<name>.mcb`.
 pub fn servo_demo_clip(name: &str) -> (PathBuf, Vec<u8>) {
-    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    use mocap_encoder::encode::{Bound, BoundSpec, CodecChoice};
+    use mocap_encoder::servo_clip::{ServoEncodeOptions, ServoNames, ServoRate};
     use mocap_encoder::{generate, rig::Rig, servo_clip, units};
     let root = workspace_root();
     let rig = Rig::read_file(&root.join("assets/rigs/animatronic_demo.toml")).unwrap();
     let m = generate::animatronic_demo();
     let channels = rig.resolve(&m.skeleton).unwrap();
     let tracks = rig.servo_tracks(&m, &channels, units::detect(&m).metres());
-    let sm = servo_clip::servo_motion(&rig, &tracks);
-    let opts = EncodeOptions {
+    let opts = ServoEncodeOptions {
         codec: CodecChoice::PcaSpline,
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
-        metres_per_unit: 1e-3,
         key_interval: None,
+        rate: ServoRate::Rig,
+        names: ServoNames::Strip,
     };
-    let enc = encode::encode(&sm, &opts).unwrap();
-    let bytes = servo_clip::attach_rig(&enc.bytes, &rig).unwrap();
+    let bytes = servo_clip::encode_servo_clip(&rig, &tracks, &opts)
+        .unwrap()
+        .bytes;
     let dir = root.join("target/qemu-parity");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.mcb"));
