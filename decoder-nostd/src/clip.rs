@@ -145,7 +145,9 @@ impl<'a> Clip<'a> {
                     }
                     header = Some((id, payload));
                 }
-                consts::SECTION_CODEC_INDEX | consts::SECTION_CODEC_PCA_SPLINE => {
+                consts::SECTION_CODEC_INDEX
+                | consts::SECTION_CODEC_PCA_SPLINE
+                | consts::SECTION_CODEC_PREDICTIVE => {
                     if codec.is_some() {
                         return Err(Error::ContainerDuplicateSection { id });
                     }

@@ -25,6 +25,8 @@ pub const SECTION_RIG: u8 = 0x03;
 pub const SECTION_CODEC_INDEX: u8 = 0x10;
 /// Section id of the `pca-spline` codec payload, §5.
 pub const SECTION_CODEC_PCA_SPLINE: u8 = 0x11;
+/// Section id of the `predictive` codec payload, §5b.
+pub const SECTION_CODEC_PREDICTIVE: u8 = 0x12;
 
 /// Channel kind codes, SPEC.md §3.2 (`kind` field).
 pub mod kind {
@@ -84,4 +86,34 @@ pub mod pca {
     pub const BASIS_SHIFT: u32 = 7;
     /// Fixed-point fraction bits of positions and spline weights.
     pub const FRAC_BITS: u32 = 16;
+}
+
+/// `predictive` codec constants, SPEC.md §5b.
+pub mod predictive {
+    /// Probabilities are `PROB_BITS`-bit: `p / 2^PROB_BITS` is the chance of a 0.
+    pub const PROB_BITS: u32 = 11;
+    /// A fresh probability (one half).
+    pub const PROB_INIT: u16 = 1 << (PROB_BITS - 1);
+    /// Adaptation speed: after each bit, `p` moves `1 / 2^MOVE_BITS` of the way.
+    pub const MOVE_BITS: u32 = 5;
+    /// The range is renormalised (one byte shifted in) while below this.
+    pub const TOP: u32 = 1 << 24;
+    /// Contexts: the channel's previous residual magnitude, 0, 1 or ≥ 2.
+    pub const CONTEXTS: usize = 3;
+    /// Magnitude bits coded with a context: `|q| > 1`, …, `|q| > MAGNITUDE_STEPS`.
+    pub const MAGNITUDE_STEPS: u32 = 8;
+    /// Probabilities per context: zero flag, sign, magnitude steps.
+    pub const PROBS_PER_CONTEXT: usize = 2 + MAGNITUDE_STEPS as usize;
+    /// Longest Exp-Golomb prefix of an escaped magnitude.
+    pub const MAX_ESCAPE_BITS: u32 = 30;
+    /// Predictor weights `a` (of 4) by mode bits 0–1: `pred = v1 + ((a · (v1 − v2)) >> 2)`.
+    pub const PREDICTOR_WEIGHTS: [i64; 4] = [0, 2, 3, 4];
+    /// Mode bit 2: a constant channel.
+    pub const MODE_CONSTANT: u32 = 0x04;
+    /// Mode bits above this hold the step multiplier.
+    pub const MODE_STEP_SHIFT: u32 = 3;
+    /// Largest quantisation step, `unit × multiplier`.
+    pub const MAX_STEP: u32 = 1 << 30;
+    /// Player state words besides `3 · C`: probabilities (two per word) and the coder.
+    pub const STATE_EXTRA_WORDS: usize = CONTEXTS * PROBS_PER_CONTEXT / 2 + 4;
 }

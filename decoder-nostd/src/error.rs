@@ -129,6 +129,19 @@ pub enum Error {
         /// Which rule of §5 is broken.
         rule: &'static str,
     },
+    /// The `predictive` codec section is malformed (§5b).
+    PredictiveMalformed {
+        /// Which rule of §5b is broken.
+        rule: &'static str,
+    },
+    /// The player's state is too small for the codec's state (the
+    /// `predictive` codec needs `3·C + 19` words).
+    PlayerStateTooSmall {
+        /// Words the codec needs.
+        needed: usize,
+        /// The player's `N`.
+        capacity: usize,
+    },
     /// The clip has more channels than the player's capacity.
     PlayerCapacity {
         /// Channels in the clip.
@@ -207,6 +220,11 @@ impl fmt::Display for Error {
                 "index codec: payload has {available_bits} bits, frames need {needed_bits}"
             ),
             Error::PcaMalformed { rule } => write!(f, "pca-spline codec: {rule}"),
+            Error::PredictiveMalformed { rule } => write!(f, "predictive codec: {rule}"),
+            Error::PlayerStateTooSmall { needed, capacity } => write!(
+                f,
+                "the codec needs {needed} words of player state, player capacity is {capacity}"
+            ),
             Error::PlayerCapacity { channels, capacity } => write!(
                 f,
                 "clip has {channels} channels, player capacity is {capacity}"

@@ -6,7 +6,13 @@ use crate::clip::Clip;
 use crate::codec::index::IndexCodec;
 #[cfg(feature = "codec-pca-spline")]
 use crate::codec::pca_spline::{Cursor, PcaSplineCodec};
-#[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
+#[cfg(feature = "codec-predictive")]
+use crate::codec::predictive::PredictiveCodec;
+#[cfg(any(
+    feature = "codec-index",
+    feature = "codec-pca-spline",
+    feature = "codec-predictive"
+))]
 use crate::consts;
 use crate::error::Error;
 
@@ -17,6 +23,8 @@ enum Codec<'a> {
     Index(IndexCodec<'a>),
     #[cfg(feature = "codec-pca-spline")]
     PcaSpline(PcaSplineCodec<'a>),
+    #[cfg(feature = "codec-predictive")]
+    Predictive(PredictiveCodec<'a>),
     #[allow(dead_code)]
     None(core::marker::PhantomData<&'a ()>),
 }
@@ -31,6 +39,12 @@ fn open_codec<'a>(clip: &Clip<'a>) -> Result<Codec<'a>, Error> {
         )?)),
         #[cfg(feature = "codec-pca-spline")]
         consts::SECTION_CODEC_PCA_SPLINE => Ok(Codec::PcaSpline(PcaSplineCodec::parse(
+            clip.codec_bytes(),
+            clip.header().channel_count(),
+            clip.header().frame_count(),
+        )?)),
+        #[cfg(feature = "codec-predictive")]
+        consts::SECTION_CODEC_PREDICTIVE => Ok(Codec::Predictive(PredictiveCodec::parse(
             clip.codec_bytes(),
             clip.header().channel_count(),
             clip.header().frame_count(),
@@ -50,7 +64,9 @@ pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
 /// the `index` codec's current frame, or the `pca-spline` codec's cache:
 /// 4 words, then per group of `n` channels and `k` components `6 + 4k`
 /// words (`3 + n` if `k = 0`), then one word per constant channel; with
-/// less room the same values are decoded, more slowly — so
+/// less room the same values are decoded, more slowly — or the
+/// `predictive` codec's two frames, contexts, probabilities and coder
+/// (`3·C + 19` words; a smaller `N` is refused) — so
 /// `size_of::<Player<N>>()` is `4·N + 152` bytes on a 32-bit MCU
 /// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
@@ -83,8 +99,18 @@ impl<'a, const N: usize> Player<'a, N> {
                 capacity: N,
             });
         }
+        let codec = open_codec(clip)?;
+        #[cfg(feature = "codec-predictive")]
+        if let Codec::Predictive(c) = &codec {
+            if c.state_words() > N {
+                return Err(Error::PlayerStateTooSmall {
+                    needed: c.state_words(),
+                    capacity: N,
+                });
+            }
+        }
         Ok(Player {
-            codec: open_codec(clip)?,
+            codec,
             channels,
             frames: header.frame_count(),
             frame_time_ns: header.frame_time_ns(),
@@ -180,14 +206,31 @@ impl<'a, const N: usize> Player<'a, N> {
             return Ok(());
         }
         let i = whole as u32;
+        #[cfg(feature = "codec-predictive")]
+        if let Codec::Predictive(c) = self.codec {
+            // The state holds two frames: frame i is `v2` once frame i + 1
+            // is decoded, unless i + 1 starts a block.
+            if self.state_frame != Some(i + 1) || c.key_before(i + 1) == i + 1 {
+                self.seek(i);
+                out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
+                self.seek(i + 1);
+            } else {
+                let v2 = self.state.get(self.channels..2 * self.channels);
+                out.copy_from_slice(v2.unwrap_or(&[]));
+            }
+            let next = self.state.get(..self.channels).unwrap_or(&[]);
+            for (o, &b) in out.iter_mut().zip(next) {
+                *o = mix(*o, b, frac);
+            }
+            return Ok(());
+        }
         self.seek(i);
         let now = self.state.get(..self.channels).unwrap_or(&[]);
         out.copy_from_slice(now);
         // Decode frame i + 1 into `out` without disturbing the state.
         decode(&self.codec, i + 1, out);
         for (o, &a) in out.iter_mut().zip(now) {
-            let d = i64::from(o.wrapping_sub(a));
-            *o = a.wrapping_add(((d * frac as i64) >> 16) as i32);
+            *o = mix(a, *o, frac);
         }
         Ok(())
     }
@@ -212,7 +255,11 @@ impl<'a, const N: usize> Player<'a, N> {
             _ => key,
         };
         let codec = self.codec;
-        let state = self.state.get_mut(..self.channels).unwrap_or(&mut []);
+        let state = match codec {
+            #[cfg(feature = "codec-predictive")]
+            Codec::Predictive(_) => &mut self.state[..],
+            _ => self.state.get_mut(..self.channels).unwrap_or(&mut []),
+        };
         for f in start..=i {
             decode(&codec, f, state);
         }
@@ -223,9 +270,17 @@ impl<'a, const N: usize> Player<'a, N> {
         match &self.codec {
             #[cfg(feature = "codec-index")]
             Codec::Index(c) => c.key_before(i),
+            #[cfg(feature = "codec-predictive")]
+            Codec::Predictive(c) => c.key_before(i),
             _ => i,
         }
     }
+}
+
+/// `a + (b − a) · frac / 2^16` in wrapping fixed point (SPEC.md §6).
+fn mix(a: i32, b: i32, frac: u64) -> i32 {
+    let d = i64::from(b.wrapping_sub(a));
+    a.wrapping_add(((d * frac as i64) >> 16) as i32)
 }
 
 /// Decodes frame `f` into `values`, which hold frame `f - 1` if `f` is not
@@ -234,6 +289,8 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
     match codec {
         #[cfg(feature = "codec-index")]
         Codec::Index(c) => c.decode_frame(f, values),
+        #[cfg(feature = "codec-predictive")]
+        Codec::Predictive(c) => c.decode_frame(f, values),
         _ => {
             let _ = (f, values);
         }

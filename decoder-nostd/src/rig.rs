@@ -35,8 +35,11 @@ mod flag {
     pub const SAME_SPEED: u8 = 0x10;
     /// `max_speed` stored in whole degrees per second (× 1000).
     pub const SPEED_DEG: u8 = 0x20;
+    /// Pulses from the previous servo's angle-to-pulse line (only the
+    /// angles are stored).
+    pub const SAME_MAP: u8 = 0x40;
     /// Every defined bit.
-    pub const ALL: u8 = 0x3F;
+    pub const ALL: u8 = 0x7F;
 }
 
 /// Millidegrees per degree in the compact form's whole-degree fields.
@@ -232,7 +235,7 @@ fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<Rig
         u16::try_from(r.varint_u32()?).ok()?
     };
     let (angle_lo_mdeg, angle_hi_mdeg, pulse_lo_qus, pulse_hi_qus) = if has(flag::SAME_RANGE) {
-        if has(flag::ANGLE_DEG) {
+        if has(flag::ANGLE_DEG) || has(flag::SAME_MAP) {
             return None;
         }
         let p = prev?;
@@ -248,9 +251,18 @@ fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<Rig
         let span = i64::from(r.varint_u32()?).checked_mul(unit)?;
         let lo32 = i32::try_from(lo).ok()?;
         let hi32 = i32::try_from(lo.checked_add(span)?).ok()?;
-        let p0 = r.varint_u32()?;
-        let dp = r.zigzag_i32()?;
-        let p1 = i64::from(p0).checked_add(i64::from(dp))?;
+        let (p0, p1) = if has(flag::SAME_MAP) {
+            // The previous servo's line, truncating division (§3.5.1).
+            let p = prev?;
+            let (a0, a1) = (i64::from(p.angle_lo_mdeg), i64::from(p.angle_hi_mdeg));
+            let (q0, q1) = (i64::from(p.pulse_lo_qus), i64::from(p.pulse_hi_qus));
+            let at = |a: i64| q0 + (a - a0) * (q1 - q0) / (a1 - a0).max(1);
+            (at(lo), at(lo + span))
+        } else {
+            let p0 = r.varint_u32()?;
+            let dp = r.zigzag_i32()?;
+            (i64::from(p0), i64::from(p0).checked_add(i64::from(dp))?)
+        };
         (lo32, hi32, u16::try_from(p0).ok()?, u16::try_from(p1).ok()?)
     };
     let neutral_qus = if has(flag::MID_NEUTRAL) {
@@ -284,6 +296,7 @@ fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<Rig
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::indexing_slicing)]
 mod tests {
     use super::*;
 

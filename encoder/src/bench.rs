@@ -131,6 +131,7 @@ pub fn codec_name(c: CodecChoice) -> &'static str {
     match c {
         CodecChoice::Index => "index",
         CodecChoice::PcaSpline => "pca-spline",
+        CodecChoice::Predictive => "predictive",
         CodecChoice::Auto => "auto",
     }
 }

@@ -9,7 +9,7 @@ use mocap_decoder::consts;
 use mocap_decoder::Clip;
 
 use crate::clipfile;
-use crate::codec::{index, pca_spline};
+use crate::codec::{index, pca_spline, predictive};
 use crate::container::{assemble, HeaderWire};
 use crate::fixed::{self, FixedChannels, MDEG_PER_DEG};
 use crate::kinematics;
@@ -140,6 +140,8 @@ pub enum CodecChoice {
     Index,
     /// Segment PCA + key-frame splines (SPEC.md §5).
     PcaSpline,
+    /// Prediction from the last two values, residuals range-coded (SPEC.md §5b).
+    Predictive,
     /// Every codec; keep the smallest clip that meets the bound.
     Auto,
 }
@@ -153,7 +155,9 @@ pub struct EncodeOptions {
     pub bound: Bound,
     /// Metres per source length unit.
     pub metres_per_unit: f64,
-    /// Force a key-frame interval (index codec); `None` = smallest clip.
+    /// Force a key-frame interval (index codec) or block length
+    /// (predictive codec); `None` = smallest clip (index) or
+    /// [`predictive::DEFAULT_BLOCK_SECONDS`] (predictive).
     pub key_interval: Option<u16>,
 }
 
@@ -231,6 +235,27 @@ fn attempt(
     opts: &EncodeOptions,
     original_mm: &[[f64; 3]],
 ) -> Result<Attempt, String> {
+    if opts.codec == CodecChoice::Predictive {
+        let block = match opts.key_interval {
+            Some(k) => u32::from(k.max(1)),
+            None => ((predictive::DEFAULT_BLOCK_SECONDS / m.frame_time).round() as u32).max(1),
+        };
+        let enc = predictive::encode(&fixed.values, tol, block)?;
+        let expected = FixedChannels {
+            kinds: fixed.kinds.clone(),
+            values: enc.decoded,
+        };
+        let mut a = prove(
+            m,
+            fixed,
+            (consts::SECTION_CODEC_PREDICTIVE, enc.section),
+            Some(&expected),
+            opts,
+            original_mm,
+        )?;
+        a.key_interval = block.min(u32::from(u16::MAX)) as u16;
+        return Ok(a);
+    }
     let intervals: Vec<u16> = match opts.key_interval {
         Some(k) => vec![k],
         None => index::KEY_INTERVALS.to_vec(),
@@ -587,25 +612,36 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
         .collect();
     let joint_of = m.skeleton.channel_joints();
     match opts.codec {
-        CodecChoice::Index => {}
+        CodecChoice::Index | CodecChoice::Predictive => {}
         CodecChoice::PcaSpline => {
             return encode_pca(m, &fixed, opts, &original_mm, &levers_um, &joint_of)
         }
         CodecChoice::Auto => {
-            let index = encode(
-                m,
-                &EncodeOptions {
-                    codec: CodecChoice::Index,
+            let mut errors = Vec::new();
+            let mut best: Option<Encoded> = None;
+            for codec in [
+                CodecChoice::Index,
+                CodecChoice::PcaSpline,
+                CodecChoice::Predictive,
+            ] {
+                let one = EncodeOptions {
+                    codec,
                     ..opts.clone()
-                },
-            );
-            let pca = encode_pca(m, &fixed, opts, &original_mm, &levers_um, &joint_of);
-            return match (index, pca) {
-                (Ok(a), Ok(b)) => Ok(if b.bytes.len() < a.bytes.len() { b } else { a }),
-                (Ok(a), Err(_)) => Ok(a),
-                (Err(_), Ok(b)) => Ok(b),
-                (Err(a), Err(b)) => Err(format!("index: {a}; pca-spline: {b}")),
-            };
+                };
+                let r = if codec == CodecChoice::PcaSpline {
+                    encode_pca(m, &fixed, &one, &original_mm, &levers_um, &joint_of)
+                } else {
+                    encode(m, &one)
+                };
+                match r {
+                    Ok(e) if best.as_ref().is_none_or(|b| e.bytes.len() < b.bytes.len()) => {
+                        best = Some(e)
+                    }
+                    Ok(_) => {}
+                    Err(e) => errors.push(format!("{}: {e}", crate::bench::codec_name(codec))),
+                }
+            }
+            return best.ok_or_else(|| errors.join("; "));
         }
     }
     let mut attempts = 0;
@@ -653,7 +689,7 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
     Ok(Encoded {
         bytes: best.bytes,
         metrics: best.metrics,
-        codec: CodecChoice::Index,
+        codec: opts.codec,
         key_interval: best.key_interval,
         attempts,
     })

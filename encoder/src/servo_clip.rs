@@ -83,6 +83,7 @@ mod flag {
     pub const MID_NEUTRAL: u8 = 0x08;
     pub const SAME_SPEED: u8 = 0x10;
     pub const SPEED_DEG: u8 = 0x20;
+    pub const SAME_MAP: u8 = 0x40;
 }
 
 /// The rig section in its compact form (SPEC.md §3.5.1): a leading `0`,
@@ -125,11 +126,18 @@ pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, String> {
                 zigzag(&mut out, s.angle_lo_mdeg);
                 varint(&mut out, span);
             }
-            varint(&mut out, u32::from(s.pulse_lo_qus));
-            zigzag(
-                &mut out,
-                i32::from(s.pulse_hi_qus) - i32::from(s.pulse_lo_qus),
-            );
+            if prev.is_some_and(|p| {
+                on_line(&p, s.angle_lo_mdeg, s.pulse_lo_qus)
+                    && on_line(&p, s.angle_hi_mdeg, s.pulse_hi_qus)
+            }) {
+                flags |= flag::SAME_MAP;
+            } else {
+                varint(&mut out, u32::from(s.pulse_lo_qus));
+                zigzag(
+                    &mut out,
+                    i32::from(s.pulse_hi_qus) - i32::from(s.pulse_lo_qus),
+                );
+            }
         }
         if u32::from(s.neutral_qus) == (u32::from(s.pulse_lo_qus) + u32::from(s.pulse_hi_qus)) / 2 {
             flags |= flag::MID_NEUTRAL;
@@ -148,6 +156,15 @@ pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, String> {
         prev = Some(s);
     }
     Ok(out)
+}
+
+/// True if servo `p`'s angle-to-pulse line gives exactly `pulse` at
+/// `angle` (SPEC.md §3.5.1 `SAME_MAP`: truncating division, exact here).
+fn on_line(p: &RigServo, angle: i32, pulse: u16) -> bool {
+    let (a0, a1) = (i64::from(p.angle_lo_mdeg), i64::from(p.angle_hi_mdeg));
+    let (q0, q1) = (i64::from(p.pulse_lo_qus), i64::from(p.pulse_hi_qus));
+    let num = (i64::from(angle) - a0) * (q1 - q0);
+    a1 > a0 && num % (a1 - a0) == 0 && q0 + num / (a1 - a0) == i64::from(pulse)
 }
 
 /// The servo form of the compact header (SPEC.md §3.4.1): `varint 0`,

@@ -110,6 +110,21 @@ fn pca_spline_iclone_at_50mm_and_arms_10mm() {
 }
 
 #[test]
+fn predictive_cmu_at_1deg() {
+    roundtrip("cmu", CodecChoice::Predictive, "1deg");
+}
+
+#[test]
+fn predictive_cmu_at_50mm_and_arms_10mm() {
+    roundtrip("cmu", CodecChoice::Predictive, "50mm+arms:10mm");
+}
+
+#[test]
+fn predictive_iclone_at_20mm() {
+    roundtrip("iclone-cmu", CodecChoice::Predictive, "20mm");
+}
+
+#[test]
 fn auto_picks_the_smaller_codec() {
     let Some(files) = corpus_files("cmu") else {
         return;
@@ -129,7 +144,8 @@ fn auto_picks_the_smaller_codec() {
     let best = size(CodecChoice::Index)
         .bytes
         .len()
-        .min(size(CodecChoice::PcaSpline).bytes.len());
+        .min(size(CodecChoice::PcaSpline).bytes.len())
+        .min(size(CodecChoice::Predictive).bytes.len());
     assert_eq!(auto.bytes.len(), best);
     assert_ne!(auto.codec, CodecChoice::Auto);
 }

@@ -134,3 +134,31 @@ fn pca_spline_mutants_never_panic() {
     let (ok, err) = hammer("16_07 pca-spline", &clip, 3000, 0xFACE);
     eprintln!("16_07 pca-spline: {ok} decoded, {err} rejected");
 }
+
+#[test]
+fn predictive_mutants_never_panic() {
+    let m = generate::animatronic_demo();
+    // Short blocks: many block starts, block table entries and coder restarts.
+    for k in [None, Some(7)] {
+        let clip = encode_with(&m, CodecChoice::Predictive, "0.5deg", k);
+        let (ok, err) = hammer(
+            "demo predictive",
+            &clip,
+            3000,
+            0x9E3D ^ u64::from(k.unwrap_or(1)),
+        );
+        eprintln!("demo predictive K={k:?}: {ok} decoded, {err} rejected");
+        assert!(err > 0);
+    }
+    let Some(files) = corpus_files("cmu") else {
+        return;
+    };
+    let file = files
+        .iter()
+        .find(|p| p.ends_with("35_17.bvh"))
+        .unwrap_or(&files[0]);
+    let m = bvh::read_file(file).unwrap();
+    let clip = encode_with(&m, CodecChoice::Predictive, "20mm", Some(64));
+    let (ok, err) = hammer("35_17 predictive", &clip, 3000, 0xD1CE);
+    eprintln!("35_17 predictive: {ok} decoded, {err} rejected");
+}

@@ -7,10 +7,10 @@ use mocap_decoder::{Clip, Player};
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{clipfile, generate, units};
 
-fn demo_clip(key_interval: Option<u16>) -> Vec<u8> {
+fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
     let m = generate::animatronic_demo();
     let opts = EncodeOptions {
-        codec: CodecChoice::Index,
+        codec,
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),
         key_interval,
@@ -18,15 +18,26 @@ fn demo_clip(key_interval: Option<u16>) -> Vec<u8> {
     encode::encode(&m, &opts).unwrap().bytes
 }
 
+/// Frame codecs and their key intervals (index) or block lengths
+/// (predictive) under test.
+const FRAME_CODECS: [(CodecChoice, u16); 6] = [
+    (CodecChoice::Index, 0),
+    (CodecChoice::Index, 5),
+    (CodecChoice::Index, 16),
+    (CodecChoice::Predictive, 1),
+    (CodecChoice::Predictive, 7),
+    (CodecChoice::Predictive, 1000),
+];
+
 #[test]
 fn random_access_equals_sequential() {
-    for k in [0u16, 5, 16] {
-        let bytes = demo_clip(Some(k));
+    for (codec, k) in FRAME_CODECS {
+        let bytes = demo_clip(codec, Some(k));
         let clip = Clip::parse(&bytes).unwrap();
         let all = clipfile::decode_all(&clip).unwrap();
         let n = clip.header().channel_count();
         let frames = clip.header().frame_count();
-        let mut player = Player::<64>::new(&clip).unwrap();
+        let mut player = Player::<160>::new(&clip).unwrap();
         let mut out = [0i32; 64];
         // A fixed pseudo-random order that jumps back and forth.
         let mut f = 7u32;
@@ -34,14 +45,24 @@ fn random_access_equals_sequential() {
             f = (f * 1103 + 12345) % frames;
             player.frame(f, &mut out).unwrap();
             let i = f as usize * n;
-            assert_eq!(&out[..n], &all[i..i + n], "K={k} frame {f}");
+            assert_eq!(&out[..n], &all[i..i + n], "{codec:?} K={k} frame {f}");
         }
     }
 }
 
 #[test]
 fn sample_at_follows_the_spec() {
-    let bytes = demo_clip(Some(8));
+    for (codec, k) in [
+        (CodecChoice::Index, 8),
+        (CodecChoice::Predictive, 7),
+        (CodecChoice::Predictive, 1000),
+    ] {
+        sample_at_follows_the_spec_for(codec, k);
+    }
+}
+
+fn sample_at_follows_the_spec_for(codec: CodecChoice, k: u16) {
+    let bytes = demo_clip(codec, Some(k));
     let clip = Clip::parse(&bytes).unwrap();
     let all = clipfile::decode_all(&clip).unwrap();
     let h = clip.header();
@@ -50,23 +71,30 @@ fn sample_at_follows_the_spec() {
         h.frame_count() as usize,
         u64::from(h.frame_time_ns()),
     );
-    let mut player = Player::<64>::new(&clip).unwrap();
+    let mut player = Player::<160>::new(&clip).unwrap();
     let mut out = [0i32; 64];
-    // 50 Hz servo ticks over a 60 Hz clip, plus times past the end.
-    for tick in 0..(frames as u64 * 60 / 50 + 20) {
-        let t_us = tick * 20_000;
-        player.sample_at(t_us, &mut out).unwrap();
+    let want_at = |t_us: u64, c: usize| {
         let ns = t_us * 1000;
         let i = (ns / period) as usize;
         let frac = (((ns % period) << 16) / period) as i64;
-        for c in 0..n {
-            let want = if i >= frames - 1 {
-                all[(frames - 1) * n + c]
-            } else {
-                let (a, b) = (all[i * n + c], all[(i + 1) * n + c]);
-                a.wrapping_add(((i64::from(b.wrapping_sub(a)) * frac) >> 16) as i32)
-            };
-            assert_eq!(out[c], want, "t={t_us} µs channel {c}");
+        if i >= frames - 1 {
+            all[(frames - 1) * n + c]
+        } else {
+            let (a, b) = (all[i * n + c], all[(i + 1) * n + c]);
+            a.wrapping_add(((i64::from(b.wrapping_sub(a)) * frac) >> 16) as i32)
+        }
+    };
+    // 50 Hz servo ticks over a 60 Hz clip, plus times past the end; then
+    // 100 Hz (two samples per frame interval) and times in a scrambled order.
+    let ticks: Vec<u64> = (0..(frames as u64 * 60 / 50 + 20))
+        .map(|tick| tick * 20_000)
+        .chain((0..frames as u64 * 2).map(|tick| tick * 10_000 + 3))
+        .chain((0..300u64).map(|i| (i * 7919 % 997) * 8_123))
+        .collect();
+    for t_us in ticks {
+        player.sample_at(t_us, &mut out).unwrap();
+        for (c, &o) in out[..n].iter().enumerate() {
+            assert_eq!(o, want_at(t_us, c), "{codec:?} t={t_us} µs channel {c}");
         }
     }
     // Time 0 is frame 0; a time within the last nanoseconds before frame f
@@ -75,6 +103,22 @@ fn sample_at_follows_the_spec() {
     assert_eq!(&out[..n], &all[..n]);
     player.sample_at(u64::MAX, &mut out).unwrap();
     assert_eq!(&out[..n], &all[(frames - 1) * n..]);
+}
+
+#[test]
+fn predictive_player_needs_its_state() {
+    let bytes = demo_clip(CodecChoice::Predictive, None);
+    let clip = Clip::parse(&bytes).unwrap();
+    let n = clip.header().channel_count();
+    assert_eq!(
+        Player::<64>::new(&clip).unwrap_err(),
+        mocap_decoder::Error::PlayerStateTooSmall {
+            needed: 3 * n + 19,
+            capacity: 64
+        }
+    );
+    assert!(Player::<{ 3 * 42 + 19 }>::new(&clip).is_ok());
+    assert_eq!(n, 42);
 }
 
 fn pca_clip() -> Vec<u8> {

@@ -4,5 +4,7 @@
 pub(crate) mod index;
 #[cfg(feature = "codec-pca-spline")]
 pub(crate) mod pca_spline;
+#[cfg(feature = "codec-predictive")]
+pub(crate) mod predictive;
 #[cfg(feature = "codec-pca-spline")]
 pub(crate) mod spline;

@@ -3,4 +3,5 @@
 pub mod bits;
 pub mod index;
 pub mod pca_spline;
+pub mod predictive;
 pub mod quantizer;
