@@ -133,7 +133,15 @@ pub fn data_lines(uart: &str) -> String {
 /// assets/rigs/animatronic_demo.toml --codec pca-spline --max-error 0.5deg`),
 /// written to `target/qemu-parity/<name>.mcb`.
 pub fn servo_demo_clip(name: &str) -> (PathBuf, Vec<u8>) {
-    use mocap_encoder::encode::{Bound, BoundSpec, CodecChoice};
+    servo_demo_clip_with(name, mocap_encoder::encode::CodecChoice::PcaSpline)
+}
+
+/// [`servo_demo_clip`] with another codec.
+pub fn servo_demo_clip_with(
+    name: &str,
+    codec: mocap_encoder::encode::CodecChoice,
+) -> (PathBuf, Vec<u8>) {
+    use mocap_encoder::encode::{Bound, BoundSpec};
     use mocap_encoder::servo_clip::{ServoEncodeOptions, ServoNames, ServoRate};
     use mocap_encoder::{generate, rig::Rig, servo_clip, units};
     let root = workspace_root();
@@ -142,7 +150,7 @@ pub fn servo_demo_clip(name: &str) -> (PathBuf, Vec<u8>) {
     let channels = rig.resolve(&m.skeleton).unwrap();
     let tracks = rig.servo_tracks(&m, &channels, units::detect(&m).metres());
     let opts = ServoEncodeOptions {
-        codec: CodecChoice::PcaSpline,
+        codec,
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
         key_interval: None,
         rate: ServoRate::Rig,

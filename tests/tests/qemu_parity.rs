@@ -16,7 +16,8 @@ use mocap_decoder::Clip;
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, clipfile, generate, motion::Motion, units};
 use mocap_tests::{
-    corpus_files, data_lines, qemu_available, run_firmware, servo_demo_clip, workspace_root,
+    corpus_files, data_lines, qemu_available, run_firmware, servo_demo_clip, servo_demo_clip_with,
+    workspace_root,
 };
 
 const BOARDS: [&str; 3] = ["microbit", "lm3s6965", "mps2-an386"];
@@ -127,9 +128,8 @@ fn firmware_output_matches_host_on_three_cores() {
     }
 }
 
-/// pca-spline clips: every frame, and `sample_at` at a 50 Hz servo rate.
-fn check_pca_spline(name: &str, m: &Motion, bound: &str) {
-    let codec = CodecChoice::PcaSpline;
+/// Every frame, and `sample_at` at a 50 Hz servo rate.
+fn check_frames_and_samples(name: &str, m: &Motion, codec: CodecChoice, bound: &str) {
     check_codec(name, m, codec, bound, None, None);
     check_codec(
         &format!("{name}-sampled"),
@@ -146,14 +146,39 @@ fn pca_spline_firmware_output_matches_host_on_three_cores() {
     if !qemu_available() {
         return;
     }
-    check_pca_spline("pca-demo", &generate::animatronic_demo(), "1deg");
+    let codec = CodecChoice::PcaSpline;
+    check_frames_and_samples("pca-demo", &generate::animatronic_demo(), codec, "1deg");
     if let Some(files) = corpus_files("cmu") {
         let f = files
             .iter()
             .find(|p| p.ends_with("35_01.bvh"))
             .unwrap_or(&files[0]);
-        check_pca_spline("pca-cmu-35_01", &bvh::read_file(f).unwrap(), "50mm");
+        check_frames_and_samples("pca-cmu-35_01", &bvh::read_file(f).unwrap(), codec, "50mm");
     }
+}
+
+/// predictive clips: every frame and 50 Hz samples (the range decoder's
+/// state carried from frame to frame), and a predictive servo clip played
+/// in servo mode against `mocap play`.
+#[test]
+fn predictive_firmware_output_matches_host_on_three_cores() {
+    use mocap_encoder::play::Protocol;
+    if !qemu_available() {
+        return;
+    }
+    let codec = CodecChoice::Predictive;
+    check_frames_and_samples("pred-demo", &generate::animatronic_demo(), codec, "0.5deg");
+    if let Some(files) = corpus_files("cmu") {
+        let f = files
+            .iter()
+            .find(|p| p.ends_with("35_01.bvh"))
+            .unwrap_or(&files[0]);
+        check_frames_and_samples("pred-cmu-35_01", &bvh::read_file(f).unwrap(), codec, "1deg");
+    }
+    let (path, bytes) = servo_demo_clip_with("servo-demo-pred", codec);
+    let clip = Clip::parse(&bytes).unwrap();
+    let expected = serial_lines(&clip, Protocol::Maestro);
+    check_servo_output(&path, "maestro", &expected, None);
 }
 
 /// Servo mode: the demo's servo clip (`mocap encode --rig`) played by the
