@@ -20,7 +20,7 @@ echo "## Rate–distortion (mocap bench)"
 echo
 /usr/bin/time -f "encode wall time for the whole run: %e s" \
     "$mocap" bench "$corpus/cmu" "$corpus/iclone-cmu" \
-    --codec index --codec pca-spline --codec auto \
+    --codec index --codec pca-spline --codec predictive --codec auto \
     --max-error 1deg --max-error 0.25deg --max-error 20mm --max-error 50mm+arms:10mm \
     --json "$out/bench.json" 2>"$out/bench.log"
 tail -1 "$out/bench.log"
@@ -43,7 +43,7 @@ echo
 echo '```text'
 for f in 35_01 05_04; do
     for b in 0.5deg 2deg; do
-        for c in index pca-spline; do
+        for c in index pca-spline predictive; do
             "$mocap" encode "$corpus/cmu/$f.bvh" --rig assets/rigs/cmu_upper_body.toml -o "$out/servo.mcb" \
                 --codec "$c" --max-error "$b" 2>/dev/null | sed "s|^$out/servo.mcb: |$f @ $b: |"
         done
@@ -67,28 +67,37 @@ for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
     echo "| $core | $board | $(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\).*/\1/p' "$out/uart-$board.txt") | $((pc / 100)).$(printf %02d $((pc % 100))) | $(get parse_instructions) | $(get player_new_instructions) | $(get stack_bytes_used) | $(get state_bytes) |"
 done
 echo
+# Per-pose decode cost of one clip on three cores, frames and 50 Hz sample_at.
+pose_cost_table() {
+    local clip=$1 tag=$2
+    echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | stack used B |"
+    echo "|---|---|---|---|---|---|---|"
+    for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
+        board=${b%%:*}; core=${b##*:}
+        for mode in frames:0 "sample_at 50 Hz":20000; do
+            name=${mode%%:*}; us=${mode##*:}
+            extra=(); [ "$us" != 0 ] && extra=(--sample-us "$us")
+            bash scripts/firmware.sh run --board "$board" --clip "$clip" --icount "${extra[@]}" \
+                2>/dev/null >"$out/uart-$tag-$board-$us.txt"
+            line=$(grep '^# decode_instructions_total=' "$out/uart-$tag-$board-$us.txt")
+            per=$(sed -n 's/.* per_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
+            pc=$(sed -n 's/.* per_channel_x100=\([0-9]*\).*/\1/p' <<<"$line")
+            worst=$(sed -n 's/.* max_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
+            stack=$(sed -n 's/^# stack_bytes_used=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
+            echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $stack |"
+        done
+    done
+    echo
+}
 pca_src="$corpus/cmu/35_01.bvh"
 "$mocap" encode "$pca_src" -o "$out/pca.mcb" --codec pca-spline --max-error 50mm+arms:10mm >/dev/null 2>&1
 echo "## pca-spline decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 50 mm + ARMS 10 mm, $(stat -c %s "$out/pca.mcb") bytes"
 echo
-echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | stack used B |"
-echo "|---|---|---|---|---|---|---|"
-for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
-    board=${b%%:*}; core=${b##*:}
-    for mode in frames:0 "sample_at 50 Hz":20000; do
-        name=${mode%%:*}; us=${mode##*:}
-        extra=(); [ "$us" != 0 ] && extra=(--sample-us "$us")
-        bash scripts/firmware.sh run --board "$board" --clip "$out/pca.mcb" --icount "${extra[@]}" \
-            2>/dev/null >"$out/uart-pca-$board-$us.txt"
-        line=$(grep '^# decode_instructions_total=' "$out/uart-pca-$board-$us.txt")
-        per=$(sed -n 's/.* per_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
-        pc=$(sed -n 's/.* per_channel_x100=\([0-9]*\).*/\1/p' <<<"$line")
-        worst=$(sed -n 's/.* max_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
-        stack=$(sed -n 's/^# stack_bytes_used=\([0-9]*\).*/\1/p' "$out/uart-pca-$board-$us.txt")
-        echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $stack |"
-    done
-done
+pose_cost_table "$out/pca.mcb" pca
+"$mocap" encode "$pca_src" -o "$out/pred.mcb" --codec predictive --max-error 1deg >/dev/null 2>&1
+echo "## predictive decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 1°, $(stat -c %s "$out/pred.mcb") bytes"
 echo
+pose_cost_table "$out/pred.mcb" pred
 echo "## Flash (opt-level = \"s\", LTO), same clip"
 echo
 echo '```text'

@@ -22,8 +22,13 @@ for f in "$corpus"/cmu/35_17.bvh "$corpus"/cmu/09_01.bvh; do
         --max-error 50mm >/dev/null 2>&1
 done
 target/release/mocap encode assets/animatronic_demo.bvh -o "$seeds/demo_pca.mcb" --codec pca-spline >/dev/null 2>&1
+# predictive: blocks, range-coded residuals (short blocks: many restarts).
+target/release/mocap encode assets/animatronic_demo.bvh -o "$seeds/demo_pred.mcb" --codec predictive \
+    --max-error 0.5deg --key-interval 16 >/dev/null 2>&1
 # A servo clip (rig table).
 target/release/mocap encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
     -o "$seeds/demo_servo.mcb" --codec pca-spline --max-error 1deg >/dev/null 2>&1
+target/release/mocap encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
+    -o "$seeds/demo_servo_pred.mcb" --codec predictive --max-error 0.5deg >/dev/null 2>&1
 cd decoder-nostd/fuzz
 cargo +nightly fuzz run parse_and_play -- -max_total_time="$secs" -max_len=65536

@@ -47,9 +47,10 @@ enum Command {
         /// Target of the bitstream.
         #[arg(long, value_enum, default_value = "mcu")]
         target: Target,
-        /// Codec.
-        #[arg(long, value_enum, default_value = "index")]
-        codec: CodecChoice,
+        /// Codec (default: `index` for motion clips — the cheapest to decode —
+        /// and `predictive` for servo clips — the smallest).
+        #[arg(long, value_enum)]
+        codec: Option<CodecChoice>,
         /// Error bound, repeatable: `1deg` (rotation channels), `8mm` (max
         /// joint position error by forward kinematics), `arms:10mm` (mean
         /// RMS joint error); `+` joins several in one value.
@@ -58,7 +59,8 @@ enum Command {
         /// Length unit of the input (auto: from the skeleton's height).
         #[arg(long, default_value = "auto")]
         units: UnitArg,
-        /// Force the key-frame interval of the index codec (0 = none).
+        /// Force the key-frame interval of the index codec (0 = none), or the
+        /// block length in frames of the predictive codec (default: 10 s).
         #[arg(long)]
         key_interval: Option<u16>,
         /// Also write the clip as a source file beside the output.
@@ -355,7 +357,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     &rig_path,
                     unit.metres(),
                     servo_clip::ServoEncodeOptions {
-                        codec,
+                        codec: codec.unwrap_or(CodecChoice::Predictive),
                         bound,
                         key_interval,
                         rate: servo_rate,
@@ -364,6 +366,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     &output,
                 );
             }
+            let codec = codec.unwrap_or(CodecChoice::Index);
             eprintln!(
                 "{}: {} frames × {} channels at {:.1} Hz, units {unit}; encoding ({codec:?}, bound {bound})…",
                 input.display(),
@@ -394,6 +397,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 x.distortion_pct,
                 match enc.codec {
                     CodecChoice::Index => format!("index, key interval {}", enc.key_interval),
+                    CodecChoice::Predictive => format!("predictive, blocks of {} frames", enc.key_interval),
                     c => bench::codec_name(c).to_string(),
                 }
             );
@@ -665,6 +669,20 @@ fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
                         );
                     }
                 }
+            }
+        }
+        if sec.id == mocap_decoder::consts::SECTION_CODEC_PREDICTIVE {
+            if let Some(info) = mocap_encoder::codec::predictive::inspect(sec.bytes) {
+                s += &format!(
+                    "  predictive codec: {} coded + {} constant channels, blocks of {} frames, {} blocks, {} bytes of range-coded residuals, state {} words\n  predictor weights (of 4) 0/2/3/4: {:?} channels\n",
+                    info.coded,
+                    info.constant,
+                    info.block_frames,
+                    info.blocks,
+                    info.payload_bytes,
+                    info.state_words,
+                    info.weights
+                );
             }
         }
         if sec.id == mocap_decoder::consts::SECTION_CODEC_PCA_SPLINE {

@@ -172,6 +172,69 @@ pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Enc
     })
 }
 
+/// What `mocap info` shows of a predictive section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectionInfo {
+    /// Coded channels.
+    pub coded: usize,
+    /// Constant channels.
+    pub constant: usize,
+    /// Frames per block.
+    pub block_frames: u32,
+    /// Blocks.
+    pub blocks: u32,
+    /// Bytes of the range-coded blocks.
+    pub payload_bytes: usize,
+    /// Coded channels per predictor weight 0, 2, 3, 4 (quarters).
+    pub weights: [usize; 4],
+    /// Player state words the clip needs.
+    pub state_words: usize,
+}
+
+/// Reads the structure of a predictive section (`None` if malformed).
+pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
+    let mut at = 0;
+    let mut next = || -> Option<u32> {
+        let mut v: u32 = 0;
+        for shift in (0..35).step_by(7) {
+            let b = *section.get(at)?;
+            at += 1;
+            v |= u32::from(b & 0x7F).checked_shl(shift)?;
+            if b & 0x80 == 0 {
+                return Some(v);
+            }
+        }
+        None
+    };
+    let channels = next()? as usize;
+    let block_frames = next()?;
+    let _unit = next()?;
+    let (mut constant, mut weights) = (0, [0usize; 4]);
+    for _ in 0..channels {
+        let mode = next()?;
+        if mode & MODE_CONSTANT != 0 {
+            constant += 1;
+            next()?;
+        } else {
+            weights[(mode & 3) as usize] += 1;
+        }
+    }
+    let blocks = next()?;
+    let mut payload_bytes = 0;
+    for _ in 0..blocks {
+        payload_bytes += next()? as usize;
+    }
+    Some(SectionInfo {
+        coded: channels - constant,
+        constant,
+        block_frames,
+        blocks,
+        payload_bytes,
+        weights,
+        state_words: 3 * channels + mocap_decoder::consts::predictive::STATE_EXTRA_WORDS,
+    })
+}
+
 fn min_max(v: &[i32]) -> (i32, i32) {
     v.iter()
         .fold((i32::MAX, i32::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)))
