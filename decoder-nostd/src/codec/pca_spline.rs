@@ -534,19 +534,7 @@ impl<'a> PcaSplineCodec<'a> {
                 target.copy(values);
                 continue;
             }
-            let hd = [rec, dst, nkm];
-            let next = match k {
-                1 => self.cached_group::<1>(seg, rel, hd, tail, out),
-                2 => self.cached_group::<2>(seg, rel, hd, tail, out),
-                3 => self.cached_group::<3>(seg, rel, hd, tail, out),
-                4 => self.cached_group::<4>(seg, rel, hd, tail, out),
-                5 => self.cached_group::<5>(seg, rel, hd, tail, out),
-                6 => self.cached_group::<6>(seg, rel, hd, tail, out),
-                7 => self.cached_group::<7>(seg, rel, hd, tail, out),
-                8 => self.cached_group::<8>(seg, rel, hd, tail, out),
-                _ => self.cached_group_any(seg, rel, hd, tail, out),
-            };
-            let Some(next) = next else {
+            let Some(next) = self.slot_group(seg, rel, [rec, dst, nkm], k, tail, out) else {
                 return;
             };
             slots = next;
@@ -561,30 +549,81 @@ impl<'a> PcaSplineCodec<'a> {
             g.take(n * self.width());
         }
         let mut body = Reader::new(seg.body.get(rest..).unwrap_or(&[]));
-        let mut ctl = [0i32; 4 * K_MAX];
+        // A slot on the stack, evaluated like a cached one (refilled every
+        // pose).
+        let mut slot = [0i32; INTERVAL + 4 * K_MAX];
         for _ in cached..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
+            let idx_at = g.pos();
             let idx = g.take(n * self.width()).unwrap_or(&[]);
+            let rec = body.pos();
             let Some(group) = read_group(&mut body, n) else {
                 return;
             };
-            let Some(target) = Dst::of(idx, self.wide, out) else {
-                return;
-            };
             if group.k == 0 {
+                let Some(target) = Dst::of(idx, self.wide, out) else {
+                    return;
+                };
                 let mut values = GroupValues::new(&group, &[]);
                 target.fill(|| values.next().unwrap_or(0));
                 continue;
             }
-            let (w, controls) = group.curve(u64::from(rel), &mut ctl);
-            target.write(
-                group.k,
-                w,
-                controls,
-                group.mean,
-                group.basis,
-                group.mean_shift,
-            );
+            if let Some((iv, _)) = slot.split_first_chunk_mut::<INTERVAL>() {
+                *iv = Cached::EMPTY;
+            }
+            let hd = [
+                (rest + rec) as i32,
+                self.dst_word(idx, idx_at, n),
+                pack(n, group.k, group.mean_shift),
+            ];
+            if self
+                .slot_group(seg, rel, hd, group.k, &mut slot, out)
+                .is_none()
+            {
+                return;
+            }
+        }
+    }
+
+    /// Where a group's values go, as a slot stores it: the first channel of
+    /// a run of consecutive channels, or `−1 −` the offset `idx_at` of its
+    /// index list `idx` in the group table.
+    fn dst_word(&self, idx: &[u8], idx_at: usize, n: usize) -> i32 {
+        let width = self.width();
+        let first = idx.get(..width).map_or(usize::MAX, index_of);
+        let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
+        // Indices strictly increase (checked by `parse`): n of them
+        // spanning n values are consecutive.
+        if last.wrapping_sub(first) == n.wrapping_sub(1) {
+            first as i32
+        } else {
+            -1 - idx_at as i32
+        }
+    }
+
+    /// Evaluates a `k > 0` group from its slot (head `hd`, then `slot`:
+    /// key interval and control points), through the function specialised
+    /// for its `k`. Returns the slots after it.
+    #[inline(always)]
+    fn slot_group<'s>(
+        &self,
+        seg: &Segment<'a>,
+        rel: u32,
+        hd: [i32; GROUP_HEAD],
+        k: usize,
+        slot: &'s mut [i32],
+        out: &mut [i32],
+    ) -> Option<&'s mut [i32]> {
+        match k {
+            1 => self.cached_group::<1>(seg, rel, hd, slot, out),
+            2 => self.cached_group::<2>(seg, rel, hd, slot, out),
+            3 => self.cached_group::<3>(seg, rel, hd, slot, out),
+            4 => self.cached_group::<4>(seg, rel, hd, slot, out),
+            5 => self.cached_group::<5>(seg, rel, hd, slot, out),
+            6 => self.cached_group::<6>(seg, rel, hd, slot, out),
+            7 => self.cached_group::<7>(seg, rel, hd, slot, out),
+            8 => self.cached_group::<8>(seg, rel, hd, slot, out),
+            _ => self.cached_group_any(seg, rel, hd, slot, out),
         }
     }
 
@@ -685,16 +724,7 @@ impl<'a> PcaSplineCodec<'a> {
             let Some((hd, rest)) = slot.split_first_chunk_mut::<GROUP_HEAD>() else {
                 break;
             };
-            let width = self.width();
-            let first = idx.get(..width).map_or(usize::MAX, index_of);
-            let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
-            // Indices strictly increase (checked by `parse`): n of them
-            // spanning n values are consecutive.
-            let dst = if last.wrapping_sub(first) == n.wrapping_sub(1) {
-                first as i32
-            } else {
-                -1 - idx_at as i32
-            };
+            let dst = self.dst_word(idx, idx_at, n);
             *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift)];
             if group.k == 0 {
                 let mut values = GroupValues::new(&group, &[]);
@@ -938,26 +968,6 @@ impl GroupHead<'_> {
         });
     }
 
-    /// The spline weights at `rel` and the four control points of every
-    /// component (in `buf`, component by component), as a cache slot holds
-    /// them.
-    fn curve<'b>(&self, rel: u64, buf: &'b mut [i32; 4 * K_MAX]) -> ([i32; 4], &'b [i32]) {
-        if self.k == 0 {
-            return ([0; 4], &[]);
-        }
-        let (i, t) = self.interval(rel);
-        let mut dst = buf.chunks_exact_mut(4);
-        self.controls(i, |p| {
-            if let Some(d) = dst.next() {
-                d.copy_from_slice(&p);
-            }
-        });
-        (
-            spline::weights(t, rel),
-            buf.get(..4 * self.k).unwrap_or(&[]),
-        )
-    }
-
     /// Refills a cache slot for `rel`: when `rel` lies in the interval
     /// after the cached one (sequential playback), the control points shift
     /// by one key and one key row is read; otherwise the interval is
@@ -1083,37 +1093,24 @@ impl<'i, 'o> Dst<'i, 'o> {
         }
     }
 
-    /// Writes a `k > 0` group at spline weights `w`: component `j` is
-    /// `a[j] = apply(w, controls[4j..4j + 4])`, then `value = (mean << ms) +
-    /// ((64 + Σ basis·a) >> 7)` (§5.4) from the `n` means and the `n × k`
-    /// basis. Specialised for the usual small `k`, so the coefficients are
-    /// computed into registers and stay there for the channel loop.
+    /// Writes a group of any `k > 0` at spline weights `w`: component `j`
+    /// is `a[j] = apply(w, controls[4j..4j + 4])`, then `value = (mean <<
+    /// ms) + ((64 + Σ basis·a) >> 7)` (§5.4) from the `n` means and the
+    /// `n × k` basis. [`Dst::write_k`] is the same for a fixed `k`.
     fn write(self, k: usize, w: [i32; 4], controls: &[i32], means: &[u8], basis: &[u8], ms: u32) {
-        match k {
-            1 => self.write_k::<1>(coefficients(w, controls), means, basis, ms),
-            2 => self.write_k::<2>(coefficients(w, controls), means, basis, ms),
-            3 => self.write_k::<3>(coefficients(w, controls), means, basis, ms),
-            4 => self.write_k::<4>(coefficients(w, controls), means, basis, ms),
-            5 => self.write_k::<5>(coefficients(w, controls), means, basis, ms),
-            6 => self.write_k::<6>(coefficients(w, controls), means, basis, ms),
-            7 => self.write_k::<7>(coefficients(w, controls), means, basis, ms),
-            8 => self.write_k::<8>(coefficients(w, controls), means, basis, ms),
-            _ => {
-                let k = k.clamp(1, K_MAX);
-                let mut coef = [0i32; K_MAX];
-                for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)) {
-                    if let Ok(p) = <[i32; 4]>::try_from(p) {
-                        *c = spline::apply(w, p);
-                    }
-                }
-                let coef = coef.get(..k).unwrap_or(&[]);
-                let mut rows = means.chunks_exact(2).zip(basis.chunks_exact(k));
-                self.fill(|| match rows.next() {
-                    Some((m, row)) => channel(mean_of(m), ms, row.iter().zip(coef)),
-                    None => 0,
-                });
+        let k = k.clamp(1, K_MAX);
+        let mut coef = [0i32; K_MAX];
+        for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)) {
+            if let Ok(p) = <[i32; 4]>::try_from(p) {
+                *c = spline::apply(w, p);
             }
         }
+        let coef = coef.get(..k).unwrap_or(&[]);
+        let mut rows = means.chunks_exact(2).zip(basis.chunks_exact(k));
+        self.fill(|| match rows.next() {
+            Some((m, row)) => channel(mean_of(m), ms, row.iter().zip(coef)),
+            None => 0,
+        });
     }
 
     /// [`Dst::write`] for `K` components with coefficients `a`.
