@@ -62,7 +62,7 @@ pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
 ///
 /// State: the codec view (a few slices), a segment cursor and `N` words —
 /// the `index` codec's current frame, or the `pca-spline` codec's cache:
-/// 4 words, then per group of `n` channels and `k` components `6 + 4k`
+/// 4 words, then per group of `n` channels and `k` components `7 + 4k`
 /// words (`3 + n` if `k = 0`), then one word per constant channel; with
 /// less room the same values are decoded, more slowly — or the
 /// `predictive` codec's two frames, contexts, probabilities and coder

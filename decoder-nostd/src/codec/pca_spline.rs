@@ -418,6 +418,14 @@ impl<'a> PcaSplineCodec<'a> {
         let n = self.const_count as usize;
         let indices = Indices::new(r.take(n * self.width()).unwrap_or(&[]), self.wide);
         match cached {
+            Some(values) if !self.wide => {
+                let idx = self.consts.get(..n).unwrap_or(&[]);
+                for (&c, &v) in idx.iter().zip(values) {
+                    if let Some(o) = out.get_mut(usize::from(c)) {
+                        *o = v;
+                    }
+                }
+            }
             Some(values) => {
                 for (c, &v) in indices.zip(values) {
                     if let Some(o) = out.get_mut(c) {
@@ -507,7 +515,6 @@ impl<'a> PcaSplineCodec<'a> {
         };
         let z = self.const_count as usize;
         self.write_consts(slots.get(consts..consts.wrapping_add(z)), out);
-        let mut coef = [0i32; K_MAX];
         for _ in 0..cached {
             let Some((hd, tail)) =
                 core::mem::take(&mut slots).split_first_chunk_mut::<GROUP_HEAD>()
@@ -515,11 +522,11 @@ impl<'a> PcaSplineCodec<'a> {
                 return;
             };
             let [rec, dst, nkm] = *hd;
-            let (n, k, ms) = unpack(nkm);
-            let Some(mut target) = self.target(dst, n, out) else {
-                return;
-            };
+            let (n, k, _) = unpack(nkm);
             if k == 0 {
+                let Some(target) = self.target(dst, n, out) else {
+                    return;
+                };
                 let Some((values, tail)) = tail.split_at_mut_checked(n) else {
                     return;
                 };
@@ -527,38 +534,10 @@ impl<'a> PcaSplineCodec<'a> {
                 target.copy(values);
                 continue;
             }
-            let Some((iv, tail)) = tail.split_first_chunk_mut::<INTERVAL>() else {
+            let Some(next) = self.slot_group(seg, rel, [rec, dst, nkm], k, tail, out) else {
                 return;
             };
-            let Some((controls, tail)) = tail.split_at_mut_checked(4 * k) else {
-                return;
-            };
-            slots = tail;
-            let rec = rec as usize;
-            let mut at = Cached::of(iv);
-            if !at.holds(rel) {
-                let mut body = Reader::new(seg.body.get(rec..).unwrap_or(&[]));
-                let Some(group) = read_group(&mut body, n) else {
-                    return;
-                };
-                at = group.refill(at, rel, iv, controls);
-            }
-            let w = at.weights(rel);
-            for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)) {
-                if let Ok(p) = <[i32; 4]>::try_from(p) {
-                    *c = spline::apply(w, p);
-                }
-            }
-            let data = seg.body.get(rec + 2..).unwrap_or(&[]);
-            // A single curve (root translations, heading): one channel, one
-            // component — no loop to set up.
-            if let (Dst::Run([o]), [m0, m1, b, ..], [a, ..], 1) = (&mut target, data, &coef, k) {
-                let mean = i32::from(i16::from_le_bytes([*m0, *m1]));
-                *o = channel(mean, ms, core::iter::once((b, a)));
-                continue;
-            }
-            let (means, basis) = data.split_at_checked(2 * n).unwrap_or((&[], &[]));
-            target.write(k, means, basis.get(..n * k).unwrap_or(&[]), ms, &coef);
+            slots = next;
         }
         if cached == self.group_count {
             return;
@@ -570,23 +549,134 @@ impl<'a> PcaSplineCodec<'a> {
             g.take(n * self.width());
         }
         let mut body = Reader::new(seg.body.get(rest..).unwrap_or(&[]));
+        // A slot on the stack, evaluated like a cached one (refilled every
+        // pose).
+        let mut slot = [0i32; INTERVAL + 4 * K_MAX];
         for _ in cached..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
+            let idx_at = g.pos();
             let idx = g.take(n * self.width()).unwrap_or(&[]);
+            let rec = body.pos();
             let Some(group) = read_group(&mut body, n) else {
                 return;
             };
-            let Some(target) = Dst::of(idx, self.wide, out) else {
-                return;
-            };
             if group.k == 0 {
+                let Some(target) = Dst::of(idx, self.wide, out) else {
+                    return;
+                };
                 let mut values = GroupValues::new(&group, &[]);
                 target.fill(|| values.next().unwrap_or(0));
                 continue;
             }
-            group.coefficients(u64::from(rel), &mut coef);
-            target.write(group.k, group.mean, group.basis, group.mean_shift, &coef);
+            if let Some((iv, _)) = slot.split_first_chunk_mut::<INTERVAL>() {
+                *iv = Cached::EMPTY;
+            }
+            let hd = [
+                (rest + rec) as i32,
+                self.dst_word(idx, idx_at, n),
+                pack(n, group.k, group.mean_shift),
+            ];
+            if self
+                .slot_group(seg, rel, hd, group.k, &mut slot, out)
+                .is_none()
+            {
+                return;
+            }
         }
+    }
+
+    /// Where a group's values go, as a slot stores it: the first channel of
+    /// a run of consecutive channels, or `−1 −` the offset `idx_at` of its
+    /// index list `idx` in the group table.
+    fn dst_word(&self, idx: &[u8], idx_at: usize, n: usize) -> i32 {
+        let width = self.width();
+        let first = idx.get(..width).map_or(usize::MAX, index_of);
+        let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
+        // Indices strictly increase (checked by `parse`): n of them
+        // spanning n values are consecutive.
+        if last.wrapping_sub(first) == n.wrapping_sub(1) {
+            first as i32
+        } else {
+            -1 - idx_at as i32
+        }
+    }
+
+    /// Evaluates a `k > 0` group from its slot (head `hd`, then `slot`:
+    /// key interval and control points), through the function specialised
+    /// for its `k`. Returns the slots after it.
+    #[inline(always)]
+    fn slot_group<'s>(
+        &self,
+        seg: &Segment<'a>,
+        rel: u32,
+        hd: [i32; GROUP_HEAD],
+        k: usize,
+        slot: &'s mut [i32],
+        out: &mut [i32],
+    ) -> Option<&'s mut [i32]> {
+        match k {
+            1 => self.cached_group::<1>(seg, rel, hd, slot, out),
+            2 => self.cached_group::<2>(seg, rel, hd, slot, out),
+            3 => self.cached_group::<3>(seg, rel, hd, slot, out),
+            4 => self.cached_group::<4>(seg, rel, hd, slot, out),
+            5 => self.cached_group::<5>(seg, rel, hd, slot, out),
+            6 => self.cached_group::<6>(seg, rel, hd, slot, out),
+            7 => self.cached_group::<7>(seg, rel, hd, slot, out),
+            8 => self.cached_group::<8>(seg, rel, hd, slot, out),
+            _ => self.cached_group_any(seg, rel, hd, slot, out),
+        }
+    }
+
+    /// Evaluates a cached group of `K` components whose slot, after its head
+    /// `hd`, is `slot` (key interval, control points); refills the slot when
+    /// `rel` left its interval. Returns the slots after it.
+    #[inline(never)]
+    fn cached_group<'s, const K: usize>(
+        &self,
+        seg: &Segment<'a>,
+        rel: u32,
+        hd: [i32; GROUP_HEAD],
+        slot: &'s mut [i32],
+        out: &mut [i32],
+    ) -> Option<&'s mut [i32]> {
+        let [rec, dst, nkm] = hd;
+        let (n, _, ms) = unpack(nkm);
+        let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
+        let (controls, rest) = rest.split_at_mut_checked(4 * K)?;
+        let rec = rec as usize;
+        let w = match cached_weights(iv, rel) {
+            Some(w) => w,
+            None => refill_slot(seg.body, rec, n, rel, iv, controls)?,
+        };
+        let a = coefficients::<K>(w, controls);
+        let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
+        self.target(dst, n, out)?.write_k::<K>(a, means, basis, ms);
+        Some(rest)
+    }
+
+    /// [`Self::cached_group`] for any `k`.
+    fn cached_group_any<'s>(
+        &self,
+        seg: &Segment<'a>,
+        rel: u32,
+        hd: [i32; GROUP_HEAD],
+        slot: &'s mut [i32],
+        out: &mut [i32],
+    ) -> Option<&'s mut [i32]> {
+        let [rec, dst, nkm] = hd;
+        let (n, k, ms) = unpack(nkm);
+        let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
+        let (controls, rest) = rest.split_at_mut_checked(4 * k)?;
+        let rec = rec as usize;
+        let w = match cached_weights(iv, rel) {
+            Some(w) => w,
+            None => refill_slot(seg.body, rec, n, rel, iv, controls)?,
+        };
+        let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
+        let basis = basis.get(..n * k)?;
+        self.target(dst, n, out)?
+            .write(k, w, controls, means, basis, ms);
+        Some(rest)
     }
 
     /// Where the values of a cached group go (its slot's `dst` word).
@@ -634,16 +724,7 @@ impl<'a> PcaSplineCodec<'a> {
             let Some((hd, rest)) = slot.split_first_chunk_mut::<GROUP_HEAD>() else {
                 break;
             };
-            let width = self.width();
-            let first = idx.get(..width).map_or(usize::MAX, index_of);
-            let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
-            // Indices strictly increase (checked by `parse`): n of them
-            // spanning n values are consecutive.
-            let dst = if last.wrapping_sub(first) == n.wrapping_sub(1) {
-                first as i32
-            } else {
-                -1 - idx_at as i32
-            };
+            let dst = self.dst_word(idx, idx_at, n);
             *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift)];
             if group.k == 0 {
                 let mut values = GroupValues::new(&group, &[]);
@@ -716,11 +797,14 @@ const CACHE_HEAD: usize = 4;
 /// Words at the start of every group slot (see `eval`).
 const GROUP_HEAD: usize = 3;
 /// Words of a `k > 0` slot's key interval (see [`Cached`]).
-const INTERVAL: usize = 3;
+const INTERVAL: usize = 4;
 
 /// The key interval a cache slot holds, packed in [`INTERVAL`] words:
-/// `t1 | t2 << 16`, `i | tb << 16`, `(ra − 1) | (rb − 1) << 16` — key
-/// times below 2^15 and tangent ratios in `2..=2^16` (§5.4) fit.
+/// `t1 << 16 | span` (`span = t2 − t1`), the bound `lim` of `rel − (t1 <<
+/// 16)` (`span << 16`, or `span << 16 | 0xFFFF` for the last interval,
+/// which also holds its end key), `(ra − 1) | (rb − 1) << 16` and `i | tb
+/// << 16` — key times below 2^15 and tangent ratios in `2..=2^16` (§5.4)
+/// fit. A pose reads the first three; a refill all four.
 #[derive(Clone, Copy)]
 struct Cached {
     /// The interval `i` and its four key times `[ta, t1, t2, tb]`; `ta` is
@@ -735,46 +819,50 @@ struct Cached {
 
 impl Cached {
     /// Holds no position.
-    const EMPTY: [i32; INTERVAL] = [0xFFFF, 0, 0];
+    const EMPTY: [i32; INTERVAL] = [0, 0, 0, 0xFFFF];
 
-    #[inline(always)]
     fn of(iv: &[i32; INTERVAL]) -> Self {
-        let [a, b, c] = iv.map(|w| w as u32);
+        let [a, _, c, d] = iv.map(|w| w as u32);
+        let t1 = a >> 16;
         Cached {
-            i: b & 0xFFFF,
-            t1: a & 0xFFFF,
-            t2: a >> 16,
-            tb: b >> 16,
+            i: d & 0xFFFF,
+            t1,
+            t2: t1 + (a & 0xFFFF),
+            tb: d >> 16,
             ra: (c & 0xFFFF) as i32 + 1,
             rb: (c >> 16) as i32 + 1,
         }
     }
 
     fn store(&self, iv: &mut [i32; INTERVAL]) {
+        let span = self.t2.wrapping_sub(self.t1) & 0xFFFF;
+        let last = if self.tb == self.t2 { 0xFFFF } else { 0 };
         *iv = [
-            self.t1 | self.t2 << 16,
-            self.i | self.tb << 16,
+            self.t1 << FRAC_BITS | span,
+            span << FRAC_BITS | last,
             (self.ra - 1) as u32 | ((self.rb - 1) as u32) << 16,
+            self.i | self.tb << 16,
         ]
         .map(|w| w as i32);
     }
+}
 
-    /// Whether `rel` lies in the interval; the last interval (`tb = t2`)
-    /// also holds its end key.
-    #[inline(always)]
-    fn holds(&self, rel: u32) -> bool {
-        self.t1 << FRAC_BITS <= rel && (rel < self.t2 << FRAC_BITS || self.tb == self.t2)
+/// The spline weights at `rel` (§5.4) if the interval held in `iv` holds
+/// it (else a refill is due): `t1 << 16 <= rel < t2 << 16`, or up to the
+/// end key for the last interval.
+#[inline(always)]
+fn cached_weights(iv: &[i32; INTERVAL], rel: u32) -> Option<[i32; 4]> {
+    let [a, lim, r, _] = iv.map(|w| w as u32);
+    let d = rel.wrapping_sub(a & 0xFFFF_0000);
+    if d >= lim {
+        return None;
     }
-
-    /// The spline weights at `rel` (inside the interval), §5.4.
-    #[inline(always)]
-    fn weights(&self, rel: u32) -> [i32; 4] {
-        let u = rel
-            .wrapping_sub(self.t1 << FRAC_BITS)
-            .checked_div(self.t2.wrapping_sub(self.t1))
-            .unwrap_or(0);
-        spline::weights_at(u, self.ra, self.rb)
-    }
+    let u = d.checked_div(a & 0xFFFF).unwrap_or(0);
+    Some(spline::weights_at(
+        u,
+        (r & 0xFFFF) as i32 + 1,
+        (r >> 16) as i32 + 1,
+    ))
 }
 
 /// `n | k << 18 | ms << 23` (n ≤ 2^17 channels, k ≤ 16, ms ≤ 16).
@@ -1005,42 +1093,42 @@ impl<'i, 'o> Dst<'i, 'o> {
         }
     }
 
-    /// Writes a `k > 0` group: `value = (mean << ms) +
-    /// ((64 + Σ basis·coef) >> 7)` (§5.4) from the `n` means and the `n × k`
-    /// basis. The inner
-    /// loops are specialised for the usual small `k`, so the coefficients
-    /// stay in registers.
-    fn write(self, k: usize, means: &[u8], basis: &[u8], ms: u32, coef: &[i32; K_MAX]) {
-        match k {
-            1 => self.write_k::<1>(means, basis, ms, coef),
-            2 => self.write_k::<2>(means, basis, ms, coef),
-            3 => self.write_k::<3>(means, basis, ms, coef),
-            4 => self.write_k::<4>(means, basis, ms, coef),
-            5 => self.write_k::<5>(means, basis, ms, coef),
-            6 => self.write_k::<6>(means, basis, ms, coef),
-            7 => self.write_k::<7>(means, basis, ms, coef),
-            8 => self.write_k::<8>(means, basis, ms, coef),
-            _ => {
-                let k = k.clamp(1, K_MAX);
-                let coef = coef.get(..k).unwrap_or(&[]);
-                let mut rows = means.chunks_exact(2).zip(basis.chunks_exact(k));
-                self.fill(|| match rows.next() {
-                    Some((m, row)) => channel(mean_of(m), ms, row.iter().zip(coef)),
-                    None => 0,
-                });
+    /// Writes a group of any `k > 0` at spline weights `w`: component `j`
+    /// is `a[j] = apply(w, controls[4j..4j + 4])`, then `value = (mean <<
+    /// ms) + ((64 + Σ basis·a) >> 7)` (§5.4) from the `n` means and the
+    /// `n × k` basis. [`Dst::write_k`] is the same for a fixed `k`.
+    fn write(self, k: usize, w: [i32; 4], controls: &[i32], means: &[u8], basis: &[u8], ms: u32) {
+        let k = k.clamp(1, K_MAX);
+        let mut coef = [0i32; K_MAX];
+        for (c, p) in coef.iter_mut().zip(controls.chunks_exact(4)) {
+            if let Ok(p) = <[i32; 4]>::try_from(p) {
+                *c = spline::apply(w, p);
             }
         }
+        let coef = coef.get(..k).unwrap_or(&[]);
+        let mut rows = means.chunks_exact(2).zip(basis.chunks_exact(k));
+        self.fill(|| match rows.next() {
+            Some((m, row)) => channel(mean_of(m), ms, row.iter().zip(coef)),
+            None => 0,
+        });
     }
 
-    /// [`Dst::write`] for `K` components.
-    fn write_k<const K: usize>(self, means: &[u8], basis: &[u8], ms: u32, coef: &[i32; K_MAX]) {
-        let a: [i32; K] = core::array::from_fn(|j| coef.get(j).copied().unwrap_or(0));
+    /// [`Dst::write`] for `K` components with coefficients `a`.
+    #[inline(always)]
+    fn write_k<const K: usize>(self, a: [i32; K], means: &[u8], basis: &[u8], ms: u32) {
         let rows = means.chunks_exact(2).zip(basis.chunks_exact(K));
         let value = |m: &[u8], row: &[u8]| match <&[u8; K]>::try_from(row) {
             Ok(row) => channel(mean_of(m), ms, row.iter().zip(a.iter())),
             Err(_) => 0,
         };
         match self {
+            // A single curve (root translations, heading): one channel —
+            // no loop to set up.
+            Dst::Run([o]) => {
+                if let (Some(m), Some(row)) = (means.get(..2), basis.get(..K)) {
+                    *o = value(m, row);
+                }
+            }
             Dst::Run(dst) => {
                 for (o, (m, row)) in dst.iter_mut().zip(rows) {
                     *o = value(m, row);
@@ -1062,6 +1150,39 @@ impl<'i, 'o> Dst<'i, 'o> {
             }
         }
     }
+}
+
+/// Moves a cache slot (key interval `iv`, control points `controls`) of the
+/// group whose record is at `rec` in `body` to the key interval holding
+/// `rel`; returns the weights at `rel`.
+#[inline(never)]
+fn refill_slot(
+    body: &[u8],
+    rec: usize,
+    n: usize,
+    rel: u32,
+    iv: &mut [i32; INTERVAL],
+    controls: &mut [i32],
+) -> Option<[i32; 4]> {
+    let mut body = Reader::new(body.get(rec..)?);
+    let group = read_group(&mut body, n)?;
+    group.refill(Cached::of(iv), rel, iv, controls);
+    cached_weights(iv, rel)
+}
+
+/// The `K` component values at spline weights `w` from their control
+/// points (four per component, in order).
+#[inline(always)]
+fn coefficients<const K: usize>(w: [i32; 4], controls: &[i32]) -> [i32; K] {
+    let mut a = [0i32; K];
+    if let Some(controls) = controls.get(..4 * K) {
+        for (c, p) in a.iter_mut().zip(controls.chunks_exact(4)) {
+            if let &[p0, p1, p2, p3] = p {
+                *c = spline::apply(w, [p0, p1, p2, p3]);
+            }
+        }
+    }
+    a
 }
 
 /// One channel: `(mean << ms) + ((64 + Σ b·a) >> 7)`.
