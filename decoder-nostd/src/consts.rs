@@ -1,4 +1,4 @@
-//! Constants shared by the encoder and the decoder (SPEC.md §2–§4).
+//! Constants shared by the encoder and the decoder (SPEC.md §2–§5b).
 //! The encoder imports this module; nothing here is duplicated elsewhere.
 
 /// File magic, SPEC.md §2.1.
@@ -116,4 +116,25 @@ pub mod predictive {
     pub const MAX_STEP: u32 = 1 << 30;
     /// Player state words besides `3 · C`: probabilities (two per word) and the coder.
     pub const STATE_EXTRA_WORDS: usize = CONTEXTS * PROBS_PER_CONTEXT / 2 + 4;
+}
+
+/// Flags of a servo in the compact rig table, SPEC.md §3.5.1.
+pub mod rig_flag {
+    /// `output` = the previous servo's + 1 (0 for the first); else a varint.
+    pub const OUTPUT_NEXT: u8 = 0x01;
+    /// Angle and pulse range as the previous servo's.
+    pub const SAME_RANGE: u8 = 0x02;
+    /// Angles stored in whole degrees (× 1000).
+    pub const ANGLE_DEG: u8 = 0x04;
+    /// `neutral` = `(pulse_lo + pulse_hi) div 2`; else a varint.
+    pub const MID_NEUTRAL: u8 = 0x08;
+    /// `max_speed` as the previous servo's.
+    pub const SAME_SPEED: u8 = 0x10;
+    /// `max_speed` stored in whole degrees per second (× 1000).
+    pub const SPEED_DEG: u8 = 0x20;
+    /// Pulses from the previous servo's angle-to-pulse line (only the
+    /// angles are stored).
+    pub const SAME_MAP: u8 = 0x40;
+    /// Every defined bit.
+    pub const ALL: u8 = 0x7F;
 }

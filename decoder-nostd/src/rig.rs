@@ -3,6 +3,7 @@
 //! it to a pulse width with the servo's limits. [`RigServo::pulse_qus`] is
 //! the one mapping the host (`mocap play`) and the firmware both use.
 
+use crate::consts::rig_flag as flag;
 use crate::error::Error;
 use crate::reader::Reader;
 
@@ -19,27 +20,6 @@ pub struct Rig<'a> {
     servos: &'a [u8],
     /// The compact form (§3.5.1): servos read relative to the previous one.
     compact: bool,
-}
-
-/// Compact servo flags (SPEC.md §3.5.1).
-mod flag {
-    /// `output` = the previous servo's + 1 (0 for the first); else a varint.
-    pub const OUTPUT_NEXT: u8 = 0x01;
-    /// Angle and pulse range as the previous servo's.
-    pub const SAME_RANGE: u8 = 0x02;
-    /// Angles stored in whole degrees (× 1000).
-    pub const ANGLE_DEG: u8 = 0x04;
-    /// `neutral` = `(pulse_lo + pulse_hi) div 2`; else a varint.
-    pub const MID_NEUTRAL: u8 = 0x08;
-    /// `max_speed` as the previous servo's.
-    pub const SAME_SPEED: u8 = 0x10;
-    /// `max_speed` stored in whole degrees per second (× 1000).
-    pub const SPEED_DEG: u8 = 0x20;
-    /// Pulses from the previous servo's angle-to-pulse line (only the
-    /// angles are stored).
-    pub const SAME_MAP: u8 = 0x40;
-    /// Every defined bit.
-    pub const ALL: u8 = 0x7F;
 }
 
 /// Millidegrees per degree in the compact form's whole-degree fields.

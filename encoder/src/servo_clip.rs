@@ -5,6 +5,7 @@
 //! angle to its pulse with the servo's limits, so the MCU writes decoded
 //! values straight to its outputs.
 
+use mocap_decoder::consts::rig_flag as flag;
 use mocap_decoder::{consts, tick_count, tick_us, Clip, RigServo};
 
 use crate::clipfile;
@@ -73,17 +74,6 @@ pub fn rate_mhz(rig: &Rig) -> u32 {
     (rig.rate_hz * 1000.0)
         .round()
         .clamp(1.0, f64::from(u32::MAX)) as u32
-}
-
-/// Compact rig-table flags (SPEC.md §3.5.1).
-mod flag {
-    pub const OUTPUT_NEXT: u8 = 0x01;
-    pub const SAME_RANGE: u8 = 0x02;
-    pub const ANGLE_DEG: u8 = 0x04;
-    pub const MID_NEUTRAL: u8 = 0x08;
-    pub const SAME_SPEED: u8 = 0x10;
-    pub const SPEED_DEG: u8 = 0x20;
-    pub const SAME_MAP: u8 = 0x40;
 }
 
 /// The rig section in its compact form (SPEC.md §3.5.1): a leading `0`,
