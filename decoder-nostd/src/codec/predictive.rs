@@ -162,8 +162,13 @@ impl<'a> PredictiveCodec<'a> {
             };
             let q = rc.residual(probs, (*cx as usize).min(CONTEXTS - 1));
             *x2 = *x1;
-            // Two's-complement wrap into i32 (SPEC.md §5b).
-            *x1 = pred.wrapping_add(q.wrapping_mul(step)) as i32;
+            // Two's-complement wrap into i32 (SPEC.md §5b); most residuals
+            // are 0, which needs no 64-bit multiply.
+            *x1 = if q == 0 {
+                pred as i32
+            } else {
+                pred.wrapping_add(q.wrapping_mul(step)) as i32
+            };
             *cx = q.unsigned_abs().min(2) as i32;
         }
         rc.store(coder);
@@ -227,6 +232,7 @@ impl<'a> RangeDecoder<'a> {
         b
     }
 
+    #[inline(always)]
     fn normalize(&mut self) {
         // Three shifts bring any non-zero range back above TOP.
         for _ in 0..4 {
@@ -239,6 +245,7 @@ impl<'a> RangeDecoder<'a> {
     }
 
     /// One bit with probability `i` of the packed `probs`, which it adapts.
+    #[inline(always)]
     fn bit(&mut self, probs: &mut [i32], i: usize) -> u32 {
         let Some(word) = probs.get_mut(i / 2) else {
             return 0;
