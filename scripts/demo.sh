@@ -32,7 +32,7 @@ fi
 # the host into Pololu Maestro commands and by the firmware's servo loop on the Cortex-M3; the
 # two byte streams must agree.
 "$mocap" encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
-    --codec pca-spline --max-error 0.5deg -o "$out/demo_servo.mcb" 2>/dev/null
+    --max-error 0.5deg -o "$out/demo_servo.mcb" 2>/dev/null
 "$mocap" play "$out/demo_servo.mcb" --protocol maestro --output "$out/host.maestro" --fast
 echo "playing the servo clip on Cortex-M3 (QEMU, Maestro output)…" >&2
 bash scripts/firmware.sh run --board lm3s6965 --clip "$out/demo_servo.mcb" --servo maestro --icount \
