@@ -646,7 +646,7 @@ impl<'a> PcaSplineCodec<'a> {
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
-            None => refill_slot(seg.body, rec, n, rel, iv, controls)?,
+            None => refill_slot(seg.body, rec, n, K, rel, iv, controls)?,
         };
         let a = coefficients::<K>(w, controls);
         let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
@@ -670,7 +670,7 @@ impl<'a> PcaSplineCodec<'a> {
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
-            None => refill_slot(seg.body, rec, n, rel, iv, controls)?,
+            None => refill_slot(seg.body, rec, n, k, rel, iv, controls)?,
         };
         let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
         let basis = basis.get(..n * k)?;
@@ -1160,14 +1160,113 @@ fn refill_slot(
     body: &[u8],
     rec: usize,
     n: usize,
+    k: usize,
     rel: u32,
     iv: &mut [i32; INTERVAL],
     controls: &mut [i32],
 ) -> Option<[i32; 4]> {
-    let mut body = Reader::new(body.get(rec..)?);
-    let group = read_group(&mut body, n)?;
-    group.refill(Cached::of(iv), rel, iv, controls);
+    if next_interval(body, rec, n, k, rel, iv, controls).is_none() {
+        let mut body = Reader::new(body.get(rec..)?);
+        let group = read_group(&mut body, n)?;
+        group.refill(Cached::of(iv), rel, iv, controls);
+    }
     cached_weights(iv, rel)
+}
+
+/// The sequential step of [`GroupHead::refill`] without parsing the whole
+/// record: when `rel` lies in the interval after the one in `iv`, shifts
+/// the `k` components' control points by one key, reads the new key's
+/// time and row (located from `n` and `k`: the record at `rec` was
+/// validated when the clip was parsed) and stores the next interval.
+/// `None` (nothing changed) when the step is not sequential.
+#[inline(always)]
+fn next_interval(
+    body: &[u8],
+    rec: usize,
+    n: usize,
+    k: usize,
+    rel: u32,
+    iv: &mut [i32; INTERVAL],
+    controls: &mut [i32],
+) -> Option<()> {
+    let at = Cached::of(iv);
+    // The record: k, ms, n means (2 bytes), n × k basis, then m and tb.
+    let keys_at = rec.wrapping_add(2).wrapping_add(n.wrapping_mul(k + 2));
+    let mut r = Reader::new(body.get(keys_at..)?);
+    let keys = r.varint_u32()?;
+    let tb = u32::from(r.u8()?);
+    let last = keys.saturating_sub(1);
+    let next = at.i.wrapping_add(1);
+    let sequential = at.tb != at.t2
+        && at.t2 << FRAC_BITS <= rel
+        && (rel < at.tb << FRAC_BITS || next.wrapping_add(1) == last)
+        && next < last;
+    if !sequential {
+        return None;
+    }
+    let comps = r.clone();
+    let mut row_bits = 0usize;
+    for _ in 0..k {
+        let wd = r.u8()?;
+        r.u8()?;
+        r.zigzag_i32()?;
+        row_bits = row_bits.wrapping_add(usize::from(wd));
+    }
+    let bits = r.rest();
+    let key = next.wrapping_add(2).min(last) as usize;
+    let tb = tb as usize;
+    let tc = bits_at(bits, key.wrapping_mul(tb), tb as u32);
+    let mut bit = (keys as usize)
+        .wrapping_mul(tb)
+        .wrapping_add(key.wrapping_mul(row_bits));
+    let mut comps = comps;
+    for d in controls.chunks_exact_mut(4).take(k) {
+        let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32()) else {
+            break;
+        };
+        let v = bits_at(bits, bit, u32::from(wd)) as i32;
+        bit = bit.wrapping_add(usize::from(wd));
+        let p = off.wrapping_add(v.wrapping_shl(u32::from(sh)));
+        if let [a, b, c, e] = d {
+            [*a, *b, *c, *e] = [*b, *c, *e, p];
+        }
+    }
+    let t = [at.t1, at.t2, at.tb, tc];
+    let (ra, rb) = spline::ratios(t);
+    Cached {
+        i: next,
+        t1: at.t2,
+        t2: at.tb,
+        tb: tc,
+        ra,
+        rb,
+    }
+    .store(iv);
+    Some(())
+}
+
+/// `n ≤ 30` bits of `bytes` from bit `bit`, LSB-first (§4.4); bits past
+/// the end read as zero, like [`BitReader`].
+#[inline(always)]
+fn bits_at(bytes: &[u8], bit: usize, n: u32) -> u32 {
+    let at = bit >> 3;
+    let word = match bytes.get(at..at.wrapping_add(8)) {
+        Some(&[a, b, c, d, e, f, g, h]) => u64::from_le_bytes([a, b, c, d, e, f, g, h]),
+        _ => tail_word(bytes, at),
+    };
+    ((word >> (bit & 7)) as u32) & 1u32.wrapping_shl(n).wrapping_sub(1)
+}
+
+/// The eight bytes of `bytes` from `at` as a little-endian word, zeros past
+/// the end.
+#[inline(never)]
+fn tail_word(bytes: &[u8], at: usize) -> u64 {
+    let mut word = 0u64;
+    for i in 0..8 {
+        let b = bytes.get(at.wrapping_add(i)).copied().unwrap_or(0);
+        word |= u64::from(b) << (8 * i);
+    }
+    word
 }
 
 /// The `K` component values at spline weights `w` from their control
