@@ -51,6 +51,14 @@ pub(crate) struct Cursor<'a> {
     patch_seen: u32,
 }
 
+/// What every group of a pose needs: the segment's body, the position
+/// relative to its start (§5.4), the output.
+struct Pose<'a, 'o> {
+    body: &'a [u8],
+    rel: u32,
+    out: &'o mut [i32],
+}
+
 /// One segment's header and its group data.
 #[derive(Clone, Copy, Debug)]
 struct Segment<'a> {
@@ -515,26 +523,31 @@ impl<'a> PcaSplineCodec<'a> {
         };
         let z = self.const_count as usize;
         self.write_consts(slots.get(consts..consts.wrapping_add(z)), out);
+        let mut pose = Pose {
+            body: seg.body,
+            rel,
+            out,
+        };
         for _ in 0..cached {
-            let Some((hd, tail)) =
-                core::mem::take(&mut slots).split_first_chunk_mut::<GROUP_HEAD>()
-            else {
+            let Some(&[_, dst, nkm]) = slots.first_chunk::<GROUP_HEAD>() else {
                 return;
             };
-            let [rec, dst, nkm] = *hd;
             let (n, k, _) = unpack(nkm);
             if k == 0 {
-                let Some(target) = self.target(dst, n, out) else {
+                let Some(target) = self.target(dst, n, pose.out) else {
                     return;
                 };
-                let Some((values, tail)) = tail.split_at_mut_checked(n) else {
+                let Some((values, tail)) = core::mem::take(&mut slots)
+                    .get_mut(GROUP_HEAD..)
+                    .and_then(|t| t.split_at_mut_checked(n))
+                else {
                     return;
                 };
                 slots = tail;
                 target.copy(values);
                 continue;
             }
-            let Some(next) = self.slot_group(seg, rel, [rec, dst, nkm], k, tail, out) else {
+            let Some(next) = self.slot_group(k, core::mem::take(&mut slots), &mut pose) else {
                 return;
             };
             slots = next;
@@ -551,7 +564,7 @@ impl<'a> PcaSplineCodec<'a> {
         let mut body = Reader::new(seg.body.get(rest..).unwrap_or(&[]));
         // A slot on the stack, evaluated like a cached one (refilled every
         // pose).
-        let mut slot = [0i32; INTERVAL + 4 * K_MAX];
+        let mut slot = [0i32; GROUP_HEAD + INTERVAL + 4 * K_MAX];
         for _ in cached..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
             let idx_at = g.pos();
@@ -561,25 +574,25 @@ impl<'a> PcaSplineCodec<'a> {
                 return;
             };
             if group.k == 0 {
-                let Some(target) = Dst::of(idx, self.wide, out) else {
+                let Some(target) = Dst::of(idx, self.wide, pose.out) else {
                     return;
                 };
                 let mut values = GroupValues::new(&group, &[]);
                 target.fill(|| values.next().unwrap_or(0));
                 continue;
             }
-            if let Some((iv, _)) = slot.split_first_chunk_mut::<INTERVAL>() {
-                *iv = Cached::EMPTY;
-            }
             let hd = [
                 (rest + rec) as i32,
                 self.dst_word(idx, idx_at, n),
                 pack(n, group.k, group.mean_shift),
             ];
-            if self
-                .slot_group(seg, rel, hd, group.k, &mut slot, out)
-                .is_none()
-            {
+            if let Some((h, iv)) = slot.split_first_chunk_mut::<GROUP_HEAD>() {
+                *h = hd;
+                if let Some((iv, _)) = iv.split_first_chunk_mut::<INTERVAL>() {
+                    *iv = Cached::EMPTY;
+                }
+            }
+            if self.slot_group(group.k, &mut slot, &mut pose).is_none() {
                 return;
             }
         }
@@ -607,23 +620,22 @@ impl<'a> PcaSplineCodec<'a> {
     #[inline(always)]
     fn slot_group<'s>(
         &self,
-        seg: &Segment<'a>,
-        rel: u32,
-        hd: [i32; GROUP_HEAD],
         k: usize,
         slot: &'s mut [i32],
-        out: &mut [i32],
+        pose: &mut Pose<'a, '_>,
     ) -> Option<&'s mut [i32]> {
+        let single = matches!(slot, [_, dst, nkm, ..] if *nkm as u32 & 0x3_FFFF == 1 && *dst >= 0);
         match k {
-            1 => self.cached_group::<1>(seg, rel, hd, slot, out),
-            2 => self.cached_group::<2>(seg, rel, hd, slot, out),
-            3 => self.cached_group::<3>(seg, rel, hd, slot, out),
-            4 => self.cached_group::<4>(seg, rel, hd, slot, out),
-            5 => self.cached_group::<5>(seg, rel, hd, slot, out),
-            6 => self.cached_group::<6>(seg, rel, hd, slot, out),
-            7 => self.cached_group::<7>(seg, rel, hd, slot, out),
-            8 => self.cached_group::<8>(seg, rel, hd, slot, out),
-            _ => self.cached_group_any(seg, rel, hd, slot, out),
+            1 if single => Self::curve(slot, pose),
+            1 => self.cached_group::<1>(slot, pose),
+            2 => self.cached_group::<2>(slot, pose),
+            3 => self.cached_group::<3>(slot, pose),
+            4 => self.cached_group::<4>(slot, pose),
+            5 => self.cached_group::<5>(slot, pose),
+            6 => self.cached_group::<6>(slot, pose),
+            7 => self.cached_group::<7>(slot, pose),
+            8 => self.cached_group::<8>(slot, pose),
+            _ => self.cached_group_any(slot, pose),
         }
     }
 
@@ -633,49 +645,72 @@ impl<'a> PcaSplineCodec<'a> {
     #[inline(never)]
     fn cached_group<'s, const K: usize>(
         &self,
-        seg: &Segment<'a>,
-        rel: u32,
-        hd: [i32; GROUP_HEAD],
         slot: &'s mut [i32],
-        out: &mut [i32],
+        pose: &mut Pose<'a, '_>,
     ) -> Option<&'s mut [i32]> {
-        let [rec, dst, nkm] = hd;
+        let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
+        let (body, rel) = (pose.body, pose.rel);
         let (n, _, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
         let (controls, rest) = rest.split_at_mut_checked(4 * K)?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
-            None => refill_slot(seg.body, rec, n, K, rel, iv, controls)?,
+            None => refill_slot(body, rec, n, K, rel, iv, controls)?,
         };
         let a = coefficients::<K>(w, controls);
-        let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
-        self.target(dst, n, out)?.write_k::<K>(a, means, basis, ms);
+        let (means, basis) = body.get(rec + 2..)?.split_at_checked(2 * n)?;
+        self.target(dst, n, pose.out)?
+            .write_k::<K>(a, means, basis, ms);
         Some(rest)
     }
 
     /// [`Self::cached_group`] for any `k`.
     fn cached_group_any<'s>(
         &self,
-        seg: &Segment<'a>,
-        rel: u32,
-        hd: [i32; GROUP_HEAD],
         slot: &'s mut [i32],
-        out: &mut [i32],
+        pose: &mut Pose<'a, '_>,
     ) -> Option<&'s mut [i32]> {
-        let [rec, dst, nkm] = hd;
+        let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
+        let (body, rel) = (pose.body, pose.rel);
         let (n, k, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
         let (controls, rest) = rest.split_at_mut_checked(4 * k)?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
-            None => refill_slot(seg.body, rec, n, k, rel, iv, controls)?,
+            None => refill_slot(body, rec, n, k, rel, iv, controls)?,
         };
-        let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
+        let (means, basis) = body.get(rec + 2..)?.split_at_checked(2 * n)?;
         let basis = basis.get(..n * k)?;
-        self.target(dst, n, out)?
+        self.target(dst, n, pose.out)?
             .write(k, w, controls, means, basis, ms);
+        Some(rest)
+    }
+
+    /// A cached group of one channel (a run at `hd[1]`) and one component — a
+    /// single curve (root translations, heading): [`Self::cached_group`]
+    /// without a channel loop and with the record's five leading bytes (k, ms,
+    /// mean, basis entry) read at once.
+    #[inline(never)]
+    fn curve<'s>(slot: &'s mut [i32], pose: &mut Pose<'a, '_>) -> Option<&'s mut [i32]> {
+        let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
+        let (body, rel) = (pose.body, pose.rel);
+        let rec = rec as usize;
+        let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
+        let (controls, rest) = rest.split_first_chunk_mut::<4>()?;
+        let w = match cached_weights(iv, rel) {
+            Some(w) => w,
+            None => refill_slot(body, rec, 1, 1, rel, iv, controls)?,
+        };
+        let a = spline::apply(w, *controls);
+        let &[_, _, m0, m1, b] = body.get(rec..rec.wrapping_add(5))? else {
+            return None;
+        };
+        let ms = (nkm as u32) >> 23 & 0x1F;
+        let mean = i32::from(i16::from_le_bytes([m0, m1]));
+        let acc = (1i32 << (BASIS_SHIFT - 1)).wrapping_add(i32::from(b as i8).wrapping_mul(a));
+        *pose.out.get_mut(dst as usize)? = mean.wrapping_shl(ms).wrapping_add(acc >> BASIS_SHIFT);
         Some(rest)
     }
 
