@@ -547,10 +547,14 @@ impl<'a> PcaSplineCodec<'a> {
                 target.copy(values);
                 continue;
             }
-            let Some(next) = self.slot_group(k, core::mem::take(&mut slots), &mut pose) else {
+            let size = GROUP_HEAD + INTERVAL + 4 * k;
+            let Some((slot, tail)) = core::mem::take(&mut slots).split_at_mut_checked(size) else {
                 return;
             };
-            slots = next;
+            if self.slot_group(k, slot, &mut pose).is_none() {
+                return;
+            }
+            slots = tail;
         }
         if cached == self.group_count {
             return;
@@ -616,14 +620,9 @@ impl<'a> PcaSplineCodec<'a> {
 
     /// Evaluates a `k > 0` group from its slot (head `hd`, then `slot`:
     /// key interval and control points), through the function specialised
-    /// for its `k`. Returns the slots after it.
+    /// for its `k`. The caller hands it exactly the slot (its size follows from `k`).
     #[inline(always)]
-    fn slot_group<'s>(
-        &self,
-        k: usize,
-        slot: &'s mut [i32],
-        pose: &mut Pose<'a, '_>,
-    ) -> Option<&'s mut [i32]> {
+    fn slot_group(&self, k: usize, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let single = matches!(slot, [_, dst, nkm, ..] if *nkm as u32 & 0x3_FFFF == 1 && *dst >= 0);
         match k {
             1 if single => Self::curve(slot, pose),
@@ -641,18 +640,18 @@ impl<'a> PcaSplineCodec<'a> {
 
     /// Evaluates a cached group of `K` components whose slot, after its head
     /// `hd`, is `slot` (key interval, control points); refills the slot when
-    /// `rel` left its interval. Returns the slots after it.
+    /// `rel` left its interval.
     #[inline(never)]
-    fn cached_group<'s, const K: usize>(
+    fn cached_group<const K: usize>(
         &self,
-        slot: &'s mut [i32],
+        slot: &mut [i32],
         pose: &mut Pose<'a, '_>,
-    ) -> Option<&'s mut [i32]> {
+    ) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
         let (body, rel) = (pose.body, pose.rel);
         let (n, _, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
-        let (controls, rest) = rest.split_at_mut_checked(4 * K)?;
+        let controls = rest.get_mut(..4 * K)?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
@@ -662,20 +661,16 @@ impl<'a> PcaSplineCodec<'a> {
         let (means, basis) = body.get(rec + 2..)?.split_at_checked(2 * n)?;
         self.target(dst, n, pose.out)?
             .write_k::<K>(a, means, basis, ms);
-        Some(rest)
+        Some(())
     }
 
     /// [`Self::cached_group`] for any `k`.
-    fn cached_group_any<'s>(
-        &self,
-        slot: &'s mut [i32],
-        pose: &mut Pose<'a, '_>,
-    ) -> Option<&'s mut [i32]> {
+    fn cached_group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
         let (body, rel) = (pose.body, pose.rel);
         let (n, k, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
-        let (controls, rest) = rest.split_at_mut_checked(4 * k)?;
+        let controls = rest.get_mut(..4 * k)?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
@@ -685,7 +680,7 @@ impl<'a> PcaSplineCodec<'a> {
         let basis = basis.get(..n * k)?;
         self.target(dst, n, pose.out)?
             .write(k, w, controls, means, basis, ms);
-        Some(rest)
+        Some(())
     }
 
     /// A cached group of one channel (a run at `hd[1]`) and one component — a
@@ -693,12 +688,12 @@ impl<'a> PcaSplineCodec<'a> {
     /// without a channel loop and with the record's five leading bytes (k, ms,
     /// mean, basis entry) read at once.
     #[inline(never)]
-    fn curve<'s>(slot: &'s mut [i32], pose: &mut Pose<'a, '_>) -> Option<&'s mut [i32]> {
+    fn curve(slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
         let (body, rel) = (pose.body, pose.rel);
         let rec = rec as usize;
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
-        let (controls, rest) = rest.split_first_chunk_mut::<4>()?;
+        let controls = rest.first_chunk_mut::<4>()?;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
             None => refill_slot(body, rec, 1, 1, rel, iv, controls)?,
@@ -711,7 +706,7 @@ impl<'a> PcaSplineCodec<'a> {
         let mean = i32::from(i16::from_le_bytes([m0, m1]));
         let acc = (1i32 << (BASIS_SHIFT - 1)).wrapping_add(i32::from(b as i8).wrapping_mul(a));
         *pose.out.get_mut(dst as usize)? = mean.wrapping_shl(ms).wrapping_add(acc >> BASIS_SHIFT);
-        Some(rest)
+        Some(())
     }
 
     /// Where the values of a cached group go (its slot's `dst` word).
