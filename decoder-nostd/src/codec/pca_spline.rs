@@ -551,9 +551,7 @@ impl<'a> PcaSplineCodec<'a> {
             let Some((slot, tail)) = core::mem::take(&mut slots).split_at_mut_checked(size) else {
                 return;
             };
-            if self.slot_group(k, slot, &mut pose).is_none() {
-                return;
-            }
+            self.slot_group(k, slot, &mut pose);
             slots = tail;
         }
         if cached == self.group_count {
@@ -596,9 +594,7 @@ impl<'a> PcaSplineCodec<'a> {
                     *iv = Cached::EMPTY;
                 }
             }
-            if self.slot_group(group.k, &mut slot, &mut pose).is_none() {
-                return;
-            }
+            self.slot_group(group.k, &mut slot, &mut pose);
         }
     }
 
@@ -622,7 +618,7 @@ impl<'a> PcaSplineCodec<'a> {
     /// key interval and control points), through the function specialised
     /// for its `k`. The caller hands it exactly the slot (its size follows from `k`).
     #[inline(always)]
-    fn slot_group(&self, k: usize, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
+    fn slot_group(&self, k: usize, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
         let single = matches!(slot, [_, dst, nkm, ..] if *nkm as u32 & 0x3_FFFF == 1 && *dst >= 0);
         match k {
             1 if single => Self::curve(slot, pose),
@@ -642,11 +638,14 @@ impl<'a> PcaSplineCodec<'a> {
     /// `hd`, is `slot` (key interval, control points); refills the slot when
     /// `rel` left its interval.
     #[inline(never)]
-    fn cached_group<const K: usize>(
-        &self,
-        slot: &mut [i32],
-        pose: &mut Pose<'a, '_>,
-    ) -> Option<()> {
+    fn cached_group<const K: usize>(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        // Nothing to report: on a validated clip every step succeeds (and
+        // returning nothing keeps a register free in the channel loops).
+        let _ = self.group_k::<K>(slot, pose);
+    }
+
+    #[inline(always)]
+    fn group_k<const K: usize>(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
         let (body, rel) = (pose.body, pose.rel);
         let (n, _, ms) = unpack(nkm);
@@ -665,7 +664,11 @@ impl<'a> PcaSplineCodec<'a> {
     }
 
     /// [`Self::cached_group`] for any `k`.
-    fn cached_group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
+    fn cached_group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        let _ = self.group_any(slot, pose);
+    }
+
+    fn group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
         let (body, rel) = (pose.body, pose.rel);
         let (n, k, ms) = unpack(nkm);
@@ -688,7 +691,12 @@ impl<'a> PcaSplineCodec<'a> {
     /// without a channel loop and with the record's five leading bytes (k, ms,
     /// mean, basis entry) read at once.
     #[inline(never)]
-    fn curve(slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
+    fn curve(slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        let _ = Self::curve_at(slot, pose);
+    }
+
+    #[inline(always)]
+    fn curve_at(slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
         let (body, rel) = (pose.body, pose.rel);
         let rec = rec as usize;
