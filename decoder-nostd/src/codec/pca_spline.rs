@@ -1288,6 +1288,13 @@ fn next_interval(
 #[inline(always)]
 fn bits_at(bytes: &[u8], bit: usize, n: u32) -> u32 {
     let at = bit >> 3;
+    if n <= 25 {
+        // 25 bits past a shift of at most 7 fit in one 32-bit window.
+        if let Some(&[a, b, c, d]) = bytes.get(at..at.wrapping_add(4)) {
+            let word = u32::from_le_bytes([a, b, c, d]);
+            return (word >> (bit & 7)) & 1u32.wrapping_shl(n).wrapping_sub(1);
+        }
+    }
     let word = match bytes.get(at..at.wrapping_add(8)) {
         Some(&[a, b, c, d, e, f, g, h]) => u64::from_le_bytes([a, b, c, d, e, f, g, h]),
         _ => tail_word(bytes, at),
