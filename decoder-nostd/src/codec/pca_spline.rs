@@ -1242,29 +1242,30 @@ fn next_interval(
     if !sequential {
         return None;
     }
-    let comps = r.clone();
+    let comps = r.rest();
     let mut row_bits = 0usize;
+    let mut p = 0;
     for _ in 0..k {
-        let wd = r.u8()?;
-        r.u8()?;
-        r.zigzag_i32()?;
-        row_bits = row_bits.wrapping_add(usize::from(wd));
+        let (wd, _, _, next) = comp_at(comps, p)?;
+        row_bits = row_bits.wrapping_add(wd as usize);
+        p = next;
     }
-    let bits = r.rest();
+    let bits = comps.get(p..)?;
     let key = next.wrapping_add(2).min(last) as usize;
     let tb = tb as usize;
     let tc = bits_at(bits, key.wrapping_mul(tb), tb as u32);
     let mut bit = (keys as usize)
         .wrapping_mul(tb)
         .wrapping_add(key.wrapping_mul(row_bits));
-    let mut comps = comps;
+    let mut p = 0;
     for d in controls.chunks_exact_mut(4).take(k) {
-        let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32()) else {
+        let Some((wd, sh, off, next)) = comp_at(comps, p) else {
             break;
         };
-        let v = bits_at(bits, bit, u32::from(wd)) as i32;
-        bit = bit.wrapping_add(usize::from(wd));
-        let p = off.wrapping_add(v.wrapping_shl(u32::from(sh)));
+        p = next;
+        let v = bits_at(bits, bit, wd) as i32;
+        bit = bit.wrapping_add(wd as usize);
+        let p = off.wrapping_add(v.wrapping_shl(sh));
         if let [a, b, c, e] = d {
             [*a, *b, *c, *e] = [*b, *c, *e, p];
         }
@@ -1281,6 +1282,30 @@ fn next_interval(
     }
     .store(iv);
     Some(())
+}
+
+/// The component record (§5.3: u8 width, u8 shift, zigzag offset) at byte
+/// `p` of `comps`: width, shift, offset and the byte after it. One- and
+/// offsets of up to three bytes (almost all) without a [`Reader`].
+#[inline(always)]
+fn comp_at(comps: &[u8], p: usize) -> Option<(u32, u32, i32, usize)> {
+    let zigzag = |u: u32| ((u >> 1) as i32) ^ -((u & 1) as i32);
+    match comps.get(p..)? {
+        &[wd, sh, o, ..] if o < 0x80 => Some((wd.into(), sh.into(), zigzag(o.into()), p + 3)),
+        &[wd, sh, o, o2, ..] if o2 < 0x80 => {
+            let u = u32::from(o & 0x7F) | u32::from(o2) << 7;
+            Some((wd.into(), sh.into(), zigzag(u), p + 4))
+        }
+        &[wd, sh, o, o2, o3, ..] if o3 < 0x80 => {
+            let u = u32::from(o & 0x7F) | u32::from(o2 & 0x7F) << 7 | u32::from(o3) << 14;
+            Some((wd.into(), sh.into(), zigzag(u), p + 5))
+        }
+        rest => {
+            let mut r = Reader::new(rest);
+            let (wd, sh, off) = (r.u8()?, r.u8()?, r.zigzag_i32()?);
+            Some((wd.into(), sh.into(), off, p + r.pos()))
+        }
+    }
 }
 
 /// `n ≤ 30` bits of `bytes` from bit `bit`, LSB-first (§4.4); bits past
