@@ -47,8 +47,20 @@ pub(crate) struct Cursor<'a> {
     prev_end: Option<u32>,
     /// The patch scan of `segment`: byte offset of the first patch not yet
     /// passed, and 1 + the frame of the last patch passed (0: none).
-    patch_at: usize,
-    patch_seen: u32,
+    patch: PatchScan,
+}
+
+/// Where a segment's patch scan stands: the byte offset `at` of the first
+/// patch not yet passed, 1 + the frame of the last patch passed (`seen`,
+/// 0: none) and the frame of the patch at `at` (`next`: `u16::MAX` when
+/// there is none, 0 when not known), so that a frame between two patches
+/// reads nothing. Patch frames are below 2^15 (§5.2, §5.5), so both fit in
+/// 16 bits and the scan takes the two words it always took.
+#[derive(Clone, Copy, Debug, Default)]
+struct PatchScan {
+    at: usize,
+    seen: u16,
+    next: u16,
 }
 
 /// What every group of a pose needs: the segment's body, the position
@@ -355,27 +367,15 @@ impl<'a> PcaSplineCodec<'a> {
         let one = 1i64 << FRAC_BITS;
         let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
         let rel = frame.wrapping_sub(cur.start);
-        (cursor.patch_at, cursor.patch_seen) = self.patches_at(
-            &cur,
-            (cursor.patch_at, cursor.patch_seen),
-            rel,
-            one - frac,
-            out,
-        );
+        cursor.patch = self.patches_at(&cur, cursor.patch, rel, one - frac, out);
         if frac > 0 {
             let after = frame.saturating_add(1);
             if cursor.next_start == Some(after) {
                 if let Some(next) = self.segment_at(cur.next) {
-                    self.patches_at(&next, (0, 0), 0, frac, out);
+                    self.patches_at(&next, PatchScan::default(), 0, frac, out);
                 }
             } else {
-                (cursor.patch_at, cursor.patch_seen) = self.patches_at(
-                    &cur,
-                    (cursor.patch_at, cursor.patch_seen),
-                    rel.wrapping_add(1),
-                    frac,
-                    out,
-                );
+                cursor.patch = self.patches_at(&cur, cursor.patch, rel.wrapping_add(1), frac, out);
             }
         }
     }
@@ -410,8 +410,7 @@ impl<'a> PcaSplineCodec<'a> {
                         segment: Some(cur),
                         next_start: next.map(|n| n.start),
                         prev_end: prev.and_then(|p| self.segment_at(p)).map(|p| p.end),
-                        patch_at: 0,
-                        patch_seen: 0,
+                        patch: PatchScan::default(),
                     };
                     return Some(cur);
                 }
@@ -460,23 +459,34 @@ impl<'a> PcaSplineCodec<'a> {
     }
 
     /// Adds the patches of `seg` at relative frame `frame` times `weight`
-    /// (16.16) to `out` (§5.5), scanning from `from` = (byte offset, 1 +
-    /// frame of the last patch before it, 0 for none) unless that is past
-    /// `frame`. Returns where the scan can resume for a later frame.
+    /// (16.16) to `out` (§5.5), scanning from `from` unless that is past
+    /// `frame` (then from the first patch); nothing is read when `frame`
+    /// lies before `from`'s next patch. Returns where the scan can resume
+    /// for a later frame.
     fn patches_at(
         &self,
         seg: &Segment<'a>,
-        from: (usize, u32),
+        from: PatchScan,
         frame: u32,
         weight: i64,
         out: &mut [i32],
-    ) -> (usize, u32) {
-        let (mut at, mut seen) = if from.1 > frame { (0, 0) } else { from };
+    ) -> PatchScan {
+        if u32::from(from.seen) <= frame && frame < u32::from(from.next) {
+            return from;
+        }
+        let (mut at, mut seen) = if u32::from(from.seen) > frame {
+            (0, 0)
+        } else {
+            (from.at, u32::from(from.seen))
+        };
         let mut r = Reader::new(seg.patches.get(at..).unwrap_or(&[]));
         let base = at;
         let mut last = seen.saturating_sub(1);
+        // The frame of the first patch read since `at` last moved.
+        let mut next = None;
         while let Some((delta, c, v)) = self.read_patch(&mut r) {
             let f = last.wrapping_add(delta);
+            next = next.or(Some(f));
             if f > frame {
                 break;
             }
@@ -486,10 +496,15 @@ impl<'a> PcaSplineCodec<'a> {
                 }
             } else {
                 (at, seen) = (base + r.pos(), f.saturating_add(1));
+                next = None;
             }
             last = f;
         }
-        (at, seen)
+        PatchScan {
+            at,
+            seen: seen as u16,
+            next: next.map_or(u16::MAX, |f| f as u16),
+        }
     }
 
     /// Evaluates every group of `seg` at `pos` (clamped into the segment)
