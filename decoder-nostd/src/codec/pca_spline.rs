@@ -1111,8 +1111,16 @@ impl<'i, 'o> Dst<'i, 'o> {
     /// Writes `values` (one per channel).
     fn copy(self, values: &[i32]) {
         if let Dst::Run(dst) = self {
-            if let Some(src) = values.get(..dst.len()) {
-                dst.copy_from_slice(src);
+            // Pairs of words (short groups: a call to memcpy costs more).
+            let mut pairs = dst.chunks_exact_mut(2);
+            let mut from = values.chunks_exact(2);
+            for (d, s) in (&mut pairs).zip(&mut from) {
+                if let ([d0, d1], &[s0, s1]) = (d, s) {
+                    (*d0, *d1) = (s0, s1);
+                }
+            }
+            if let ([d], [s, ..]) = (pairs.into_remainder(), from.remainder()) {
+                *d = *s;
             }
             return;
         }
