@@ -1227,11 +1227,26 @@ fn refill_slot(
     controls: &mut [i32],
 ) -> Option<[i32; 4]> {
     if next_interval(body, rec, n, k, rel, iv, controls).is_none() {
-        let mut body = Reader::new(body.get(rec..)?);
-        let group = read_group(&mut body, n)?;
-        group.refill(Cached::of(iv), rel, iv, controls);
+        refill_search(body, rec, n, rel, iv, controls)?;
     }
     cached_weights(iv, rel)
+}
+
+/// [`refill_slot`] when the step is not sequential: the record parsed, the
+/// interval searched (out of line: rare, and its frame is large).
+#[inline(never)]
+fn refill_search(
+    body: &[u8],
+    rec: usize,
+    n: usize,
+    rel: u32,
+    iv: &mut [i32; INTERVAL],
+    controls: &mut [i32],
+) -> Option<()> {
+    let mut body = Reader::new(body.get(rec..)?);
+    let group = read_group(&mut body, n)?;
+    group.refill(Cached::of(iv), rel, iv, controls);
+    Some(())
 }
 
 /// The sequential step of [`GroupHead::refill`] without parsing the whole
