@@ -530,7 +530,7 @@ impl<'a> PcaSplineCodec<'a> {
             .unwrap_or((&mut [], &mut []));
         let owner = seg.start.wrapping_add(1) as i32;
         if head.first() != Some(&owner) {
-            self.prepare(seg, owner, head, slots);
+            self.prepare(seg, owner, rel, head, slots);
         }
         let (cached, rest, consts) = match *head {
             [_, g, at, c] => ((g as u32).min(self.group_count), at as usize, c as usize),
@@ -746,8 +746,16 @@ impl<'a> PcaSplineCodec<'a> {
         })
     }
 
-    /// Fills the cache head and as many group slots as fit for `seg`.
-    fn prepare(&self, seg: &Segment<'a>, owner: i32, head: &mut [i32], slots: &mut [i32]) {
+    /// Fills the cache head and as many group slots as fit for `seg`, each
+    /// group's key interval the one holding `rel`.
+    fn prepare(
+        &self,
+        seg: &Segment<'a>,
+        owner: i32,
+        rel: u32,
+        head: &mut [i32],
+        slots: &mut [i32],
+    ) {
         let mut g = Reader::new(self.groups);
         let mut body = Reader::new(seg.body);
         let total = slots.len();
@@ -784,9 +792,11 @@ impl<'a> PcaSplineCodec<'a> {
                 for v in rest.iter_mut() {
                     *v = values.next().unwrap_or(0);
                 }
-            } else if let Some((iv, _)) = rest.split_first_chunk_mut::<INTERVAL>() {
-                // An empty interval: the first pose fills it.
+            } else if let Some((iv, controls)) = rest.split_first_chunk_mut::<INTERVAL>() {
+                // The interval holding `rel`, as the pose's refill of an
+                // empty slot would find it, from the record at hand.
                 *iv = Cached::EMPTY;
+                group.refill(Cached::of(iv), rel, iv, controls);
             }
         }
         // The constants' values too, if they fit after the slots.
@@ -965,7 +975,7 @@ impl GroupHead<'_> {
     fn controls(&self, i: u32, mut each: impl FnMut([i32; 4])) {
         let last = self.keys.saturating_sub(1);
         let rows = [i.saturating_sub(1), i, i + 1, (i + 2).min(last)];
-        let mut readers = rows.map(|row| BitReader::at(self.bits, self.key_row(row)));
+        let mut at = rows.map(|row| self.key_row(row));
         let mut comps = Reader::new(self.comps);
         for _ in 0..self.k {
             let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32())
@@ -973,17 +983,21 @@ impl GroupHead<'_> {
                 return;
             };
             let (wd, sh) = (u32::from(wd), u32::from(sh));
-            each(
-                readers
-                    .each_mut()
-                    .map(|r| off.wrapping_add((read_wide(r, wd) as i32).wrapping_shl(sh))),
-            );
+            each(at.each_mut().map(|bit| {
+                let v = bits_at64(self.bits, *bit, wd) as i32;
+                *bit = bit.wrapping_add(u64::from(wd));
+                off.wrapping_add(v.wrapping_shl(sh))
+            }));
         }
     }
 
     /// Key time `i`.
     fn time(&self, i: u32) -> u32 {
-        BitReader::at(self.bits, u64::from(i) * u64::from(self.time_bits)).read(self.time_bits)
+        bits_at64(
+            self.bits,
+            u64::from(i) * u64::from(self.time_bits),
+            self.time_bits,
+        )
     }
 
     /// The bit position of key row `row`.
@@ -1365,13 +1379,26 @@ fn bits_at(bytes: &[u8], bit: usize, n: u32) -> u32 {
     ((word >> (bit & 7)) as u32) & 1u32.wrapping_shl(n).wrapping_sub(1)
 }
 
+/// [`bits_at`] at a 64-bit bit position.
+#[inline(always)]
+fn bits_at64(bytes: &[u8], bit: u64, n: u32) -> u32 {
+    match usize::try_from(bit) {
+        Ok(bit) if bit < usize::MAX - 64 => bits_at(bytes, bit, n),
+        _ => 0,
+    }
+}
+
 /// The eight bytes of `bytes` from `at` as a little-endian word, zeros past
 /// the end.
 #[inline(never)]
 fn tail_word(bytes: &[u8], at: usize) -> u64 {
     let mut word = 0u64;
     for i in 0..8 {
-        let b = bytes.get(at.wrapping_add(i)).copied().unwrap_or(0);
+        let b = at
+            .checked_add(i)
+            .and_then(|j| bytes.get(j))
+            .copied()
+            .unwrap_or(0);
         word |= u64::from(b) << (8 * i);
     }
     word
