@@ -1537,13 +1537,12 @@ fn read_group<'a>(r: &mut Reader<'a>, n: usize) -> Option<GroupHead<'a>> {
     let comps_at = r.clone();
     let mut row_bits = 0u32;
     for _ in 0..k {
-        let w = r.u8()?;
-        let s = r.u8()?;
-        if w > MAX_VALUE_BITS || s > MAX_VALUE_SHIFT {
+        let (w, s, _, len) = comp_at(r.clone().rest(), 0)?;
+        r.take(len)?;
+        if w > u32::from(MAX_VALUE_BITS) || s > u32::from(MAX_VALUE_SHIFT) {
             return None;
         }
-        r.zigzag_i32()?;
-        row_bits += u32::from(w);
+        row_bits += w;
     }
     head.comps = comps_at.clone().take(r.pos() - comps_at.pos())?;
     head.row_bits = row_bits;
