@@ -517,7 +517,7 @@ impl<'a> PcaSplineCodec<'a> {
     /// starts with [`GROUP_HEAD`] words — the record's offset in the body,
     /// where the values go (the first channel of a run of consecutive
     /// channels, or `−1 −` the offset of the group's index list), the
-    /// offset of its means, and `n | k << 18 | ms << 23` — then for `k = 0`
+    /// offset of its means, and `n | k << 18 | c << 23 | ms << 24` ([`pack`]) — then for `k = 0`
     /// the `n` channel values, for `k > 0` the key interval it holds
     /// ([`INTERVAL`] words: `[from, to)` of `rel` in 16.16, `to` being
     /// `u32::MAX` for the last interval, the span in frames, the tangent
@@ -566,7 +566,7 @@ impl<'a> PcaSplineCodec<'a> {
             let Some((slot, tail)) = core::mem::take(&mut slots).split_at_mut_checked(size) else {
                 return;
             };
-            self.slot_group(k, slot, &mut pose);
+            self.slot_group(nkm, slot, &mut pose);
             slots = tail;
         }
         if cached == self.group_count {
@@ -598,10 +598,11 @@ impl<'a> PcaSplineCodec<'a> {
                 target.fill(|| values.next().unwrap_or(0));
                 continue;
             }
+            let dst = self.dst_word(idx, idx_at, n);
             let hd = [
                 (rest + rec) as i32,
-                self.dst_word(idx, idx_at, n),
-                pack(n, group.k, group.mean_shift),
+                dst,
+                pack(n, group.k, group.mean_shift, dst),
             ];
             if let Some((h, iv)) = slot.split_first_chunk_mut::<GROUP_HEAD>() {
                 *h = hd;
@@ -609,7 +610,7 @@ impl<'a> PcaSplineCodec<'a> {
                     *iv = Cached::EMPTY;
                 }
             }
-            self.slot_group(group.k, &mut slot, &mut pose);
+            self.slot_group(hd[2], &mut slot, &mut pose);
         }
     }
 
@@ -629,14 +630,15 @@ impl<'a> PcaSplineCodec<'a> {
         }
     }
 
-    /// Evaluates a `k > 0` group from its slot (head `hd`, then `slot`:
-    /// key interval and control points), through the function specialised
-    /// for its `k`. The caller hands it exactly the slot (its size follows from `k`).
+    /// Evaluates a `k > 0` group from its slot (head, key interval, control
+    /// points), through the function specialised for its `k` (or for a
+    /// single curve), as its head word `nkm` says. The caller hands it
+    /// exactly the slot (its size follows from `k`).
     #[inline(always)]
-    fn slot_group(&self, k: usize, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
-        let single = matches!(slot, [_, dst, nkm, ..] if *nkm as u32 & 0x3_FFFF == 1 && *dst >= 0);
-        match k {
-            1 if single => Self::curve(slot, pose),
+    fn slot_group(&self, nkm: i32, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        // k, and 32 more for a single curve (see [`pack`]).
+        match nkm as u32 >> 18 & 0x3F {
+            33 => Self::curve(slot, pose),
             1 => self.cached_group::<1>(slot, pose),
             2 => self.cached_group::<2>(slot, pose),
             3 => self.cached_group::<3>(slot, pose),
@@ -725,7 +727,7 @@ impl<'a> PcaSplineCodec<'a> {
         let &[_, _, m0, m1, b] = body.get(rec..rec.wrapping_add(5))? else {
             return None;
         };
-        let ms = (nkm as u32) >> 23 & 0x1F;
+        let ms = (nkm as u32) >> 24 & 0x1F;
         let mean = i32::from(i16::from_le_bytes([m0, m1]));
         let acc = (1i32 << (BASIS_SHIFT - 1)).wrapping_add(i32::from(b as i8).wrapping_mul(a));
         *pose.out.get_mut(dst as usize)? = mean.wrapping_shl(ms).wrapping_add(acc >> BASIS_SHIFT);
@@ -786,7 +788,7 @@ impl<'a> PcaSplineCodec<'a> {
                 break;
             };
             let dst = self.dst_word(idx, idx_at, n);
-            *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift)];
+            *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift, dst)];
             if group.k == 0 {
                 let mut values = GroupValues::new(&group, &[]);
                 for v in rest.iter_mut() {
@@ -928,9 +930,12 @@ fn cached_weights(iv: &[i32; INTERVAL], rel: u32) -> Option<[i32; 4]> {
     ))
 }
 
-/// `n | k << 18 | ms << 23` (n ≤ 2^17 channels, k ≤ 16, ms ≤ 16).
-fn pack(n: usize, k: usize, ms: u32) -> i32 {
-    (n as u32 | (k as u32) << 18 | ms << 23) as i32
+/// `n | k << 18 | c << 23 | ms << 24` (n ≤ 2^17 channels, k ≤ 16, ms ≤ 16)
+/// with `c` set for a single curve (one channel, a run at `dst`, one
+/// component), so `nkm >> 18 & 0x3F` dispatches a slot.
+fn pack(n: usize, k: usize, ms: u32, dst: i32) -> i32 {
+    let curve = u32::from(n == 1 && k == 1 && dst >= 0);
+    (n as u32 | (k as u32) << 18 | curve << 23 | ms << 24) as i32
 }
 
 fn unpack(nkm: i32) -> (usize, usize, u32) {
@@ -938,7 +943,7 @@ fn unpack(nkm: i32) -> (usize, usize, u32) {
     (
         (v & 0x3_FFFF) as usize,
         (v >> 18 & 0x1F) as usize,
-        v >> 23 & 0x1F,
+        v >> 24 & 0x1F,
     )
 }
 
