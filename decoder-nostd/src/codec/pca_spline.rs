@@ -47,8 +47,28 @@ pub(crate) struct Cursor<'a> {
     prev_end: Option<u32>,
     /// The patch scan of `segment`: byte offset of the first patch not yet
     /// passed, and 1 + the frame of the last patch passed (0: none).
-    patch_at: usize,
-    patch_seen: u32,
+    patch: PatchScan,
+}
+
+/// Where a segment's patch scan stands: the byte offset `at` of the first
+/// patch not yet passed, 1 + the frame of the last patch passed (`seen`,
+/// 0: none) and the frame of the patch at `at` (`next`: `u16::MAX` when
+/// there is none, 0 when not known), so that a frame between two patches
+/// reads nothing. Patch frames are below 2^15 (§5.2, §5.5), so both fit in
+/// 16 bits and the scan takes the two words it always took.
+#[derive(Clone, Copy, Debug, Default)]
+struct PatchScan {
+    at: usize,
+    seen: u16,
+    next: u16,
+}
+
+/// What every group of a pose needs: the segment's body, the position
+/// relative to its start (§5.4), the output.
+struct Pose<'a, 'o> {
+    body: &'a [u8],
+    rel: u32,
+    out: &'o mut [i32],
 }
 
 /// One segment's header and its group data.
@@ -347,27 +367,15 @@ impl<'a> PcaSplineCodec<'a> {
         let one = 1i64 << FRAC_BITS;
         let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
         let rel = frame.wrapping_sub(cur.start);
-        (cursor.patch_at, cursor.patch_seen) = self.patches_at(
-            &cur,
-            (cursor.patch_at, cursor.patch_seen),
-            rel,
-            one - frac,
-            out,
-        );
+        cursor.patch = self.patches_at(&cur, cursor.patch, rel, one - frac, out);
         if frac > 0 {
             let after = frame.saturating_add(1);
             if cursor.next_start == Some(after) {
                 if let Some(next) = self.segment_at(cur.next) {
-                    self.patches_at(&next, (0, 0), 0, frac, out);
+                    self.patches_at(&next, PatchScan::default(), 0, frac, out);
                 }
             } else {
-                (cursor.patch_at, cursor.patch_seen) = self.patches_at(
-                    &cur,
-                    (cursor.patch_at, cursor.patch_seen),
-                    rel.wrapping_add(1),
-                    frac,
-                    out,
-                );
+                cursor.patch = self.patches_at(&cur, cursor.patch, rel.wrapping_add(1), frac, out);
             }
         }
     }
@@ -402,8 +410,7 @@ impl<'a> PcaSplineCodec<'a> {
                         segment: Some(cur),
                         next_start: next.map(|n| n.start),
                         prev_end: prev.and_then(|p| self.segment_at(p)).map(|p| p.end),
-                        patch_at: 0,
-                        patch_seen: 0,
+                        patch: PatchScan::default(),
                     };
                     return Some(cur);
                 }
@@ -452,23 +459,34 @@ impl<'a> PcaSplineCodec<'a> {
     }
 
     /// Adds the patches of `seg` at relative frame `frame` times `weight`
-    /// (16.16) to `out` (§5.5), scanning from `from` = (byte offset, 1 +
-    /// frame of the last patch before it, 0 for none) unless that is past
-    /// `frame`. Returns where the scan can resume for a later frame.
+    /// (16.16) to `out` (§5.5), scanning from `from` unless that is past
+    /// `frame` (then from the first patch); nothing is read when `frame`
+    /// lies before `from`'s next patch. Returns where the scan can resume
+    /// for a later frame.
     fn patches_at(
         &self,
         seg: &Segment<'a>,
-        from: (usize, u32),
+        from: PatchScan,
         frame: u32,
         weight: i64,
         out: &mut [i32],
-    ) -> (usize, u32) {
-        let (mut at, mut seen) = if from.1 > frame { (0, 0) } else { from };
+    ) -> PatchScan {
+        if u32::from(from.seen) <= frame && frame < u32::from(from.next) {
+            return from;
+        }
+        let (mut at, mut seen) = if u32::from(from.seen) > frame {
+            (0, 0)
+        } else {
+            (from.at, u32::from(from.seen))
+        };
         let mut r = Reader::new(seg.patches.get(at..).unwrap_or(&[]));
         let base = at;
         let mut last = seen.saturating_sub(1);
+        // The frame of the first patch read since `at` last moved.
+        let mut next = None;
         while let Some((delta, c, v)) = self.read_patch(&mut r) {
             let f = last.wrapping_add(delta);
+            next = next.or(Some(f));
             if f > frame {
                 break;
             }
@@ -478,10 +496,15 @@ impl<'a> PcaSplineCodec<'a> {
                 }
             } else {
                 (at, seen) = (base + r.pos(), f.saturating_add(1));
+                next = None;
             }
             last = f;
         }
-        (at, seen)
+        PatchScan {
+            at,
+            seen: seen as u16,
+            next: next.map_or(u16::MAX, |f| f as u16),
+        }
     }
 
     /// Evaluates every group of `seg` at `pos` (clamped into the segment)
@@ -494,7 +517,7 @@ impl<'a> PcaSplineCodec<'a> {
     /// starts with [`GROUP_HEAD`] words — the record's offset in the body,
     /// where the values go (the first channel of a run of consecutive
     /// channels, or `−1 −` the offset of the group's index list), the
-    /// offset of its means, and `n | k << 18 | ms << 23` — then for `k = 0`
+    /// offset of its means, and `n | k << 18 | c << 23 | ms << 24` ([`pack`]) — then for `k = 0`
     /// the `n` channel values, for `k > 0` the key interval it holds
     /// ([`INTERVAL`] words: `[from, to)` of `rel` in 16.16, `to` being
     /// `u32::MAX` for the last interval, the span in frames, the tangent
@@ -507,7 +530,7 @@ impl<'a> PcaSplineCodec<'a> {
             .unwrap_or((&mut [], &mut []));
         let owner = seg.start.wrapping_add(1) as i32;
         if head.first() != Some(&owner) {
-            self.prepare(seg, owner, head, slots);
+            self.prepare(seg, owner, rel, head, slots);
         }
         let (cached, rest, consts) = match *head {
             [_, g, at, c] => ((g as u32).min(self.group_count), at as usize, c as usize),
@@ -515,29 +538,36 @@ impl<'a> PcaSplineCodec<'a> {
         };
         let z = self.const_count as usize;
         self.write_consts(slots.get(consts..consts.wrapping_add(z)), out);
+        let mut pose = Pose {
+            body: seg.body,
+            rel,
+            out,
+        };
         for _ in 0..cached {
-            let Some((hd, tail)) =
-                core::mem::take(&mut slots).split_first_chunk_mut::<GROUP_HEAD>()
-            else {
+            let Some(&[_, dst, nkm]) = slots.first_chunk::<GROUP_HEAD>() else {
                 return;
             };
-            let [rec, dst, nkm] = *hd;
             let (n, k, _) = unpack(nkm);
             if k == 0 {
-                let Some(target) = self.target(dst, n, out) else {
+                let Some(target) = self.target(dst, n, pose.out) else {
                     return;
                 };
-                let Some((values, tail)) = tail.split_at_mut_checked(n) else {
+                let Some((values, tail)) = core::mem::take(&mut slots)
+                    .get_mut(GROUP_HEAD..)
+                    .and_then(|t| t.split_at_mut_checked(n))
+                else {
                     return;
                 };
                 slots = tail;
                 target.copy(values);
                 continue;
             }
-            let Some(next) = self.slot_group(seg, rel, [rec, dst, nkm], k, tail, out) else {
+            let size = GROUP_HEAD + INTERVAL + 4 * k;
+            let Some((slot, tail)) = core::mem::take(&mut slots).split_at_mut_checked(size) else {
                 return;
             };
-            slots = next;
+            self.slot_group(nkm, slot, &mut pose);
+            slots = tail;
         }
         if cached == self.group_count {
             return;
@@ -551,7 +581,7 @@ impl<'a> PcaSplineCodec<'a> {
         let mut body = Reader::new(seg.body.get(rest..).unwrap_or(&[]));
         // A slot on the stack, evaluated like a cached one (refilled every
         // pose).
-        let mut slot = [0i32; INTERVAL + 4 * K_MAX];
+        let mut slot = [0i32; GROUP_HEAD + INTERVAL + 4 * K_MAX];
         for _ in cached..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
             let idx_at = g.pos();
@@ -561,27 +591,26 @@ impl<'a> PcaSplineCodec<'a> {
                 return;
             };
             if group.k == 0 {
-                let Some(target) = Dst::of(idx, self.wide, out) else {
+                let Some(target) = Dst::of(idx, self.wide, pose.out) else {
                     return;
                 };
                 let mut values = GroupValues::new(&group, &[]);
                 target.fill(|| values.next().unwrap_or(0));
                 continue;
             }
-            if let Some((iv, _)) = slot.split_first_chunk_mut::<INTERVAL>() {
-                *iv = Cached::EMPTY;
-            }
+            let dst = self.dst_word(idx, idx_at, n);
             let hd = [
                 (rest + rec) as i32,
-                self.dst_word(idx, idx_at, n),
-                pack(n, group.k, group.mean_shift),
+                dst,
+                pack(n, group.k, group.mean_shift, dst),
             ];
-            if self
-                .slot_group(seg, rel, hd, group.k, &mut slot, out)
-                .is_none()
-            {
-                return;
+            if let Some((h, iv)) = slot.split_first_chunk_mut::<GROUP_HEAD>() {
+                *h = hd;
+                if let Some((iv, _)) = iv.split_first_chunk_mut::<INTERVAL>() {
+                    *iv = Cached::EMPTY;
+                }
             }
+            self.slot_group(hd[2], &mut slot, &mut pose);
         }
     }
 
@@ -601,82 +630,108 @@ impl<'a> PcaSplineCodec<'a> {
         }
     }
 
-    /// Evaluates a `k > 0` group from its slot (head `hd`, then `slot`:
-    /// key interval and control points), through the function specialised
-    /// for its `k`. Returns the slots after it.
+    /// Evaluates a `k > 0` group from its slot (head, key interval, control
+    /// points), through the function specialised for its `k` (or for a
+    /// single curve), as its head word `nkm` says. The caller hands it
+    /// exactly the slot (its size follows from `k`).
     #[inline(always)]
-    fn slot_group<'s>(
-        &self,
-        seg: &Segment<'a>,
-        rel: u32,
-        hd: [i32; GROUP_HEAD],
-        k: usize,
-        slot: &'s mut [i32],
-        out: &mut [i32],
-    ) -> Option<&'s mut [i32]> {
-        match k {
-            1 => self.cached_group::<1>(seg, rel, hd, slot, out),
-            2 => self.cached_group::<2>(seg, rel, hd, slot, out),
-            3 => self.cached_group::<3>(seg, rel, hd, slot, out),
-            4 => self.cached_group::<4>(seg, rel, hd, slot, out),
-            5 => self.cached_group::<5>(seg, rel, hd, slot, out),
-            6 => self.cached_group::<6>(seg, rel, hd, slot, out),
-            7 => self.cached_group::<7>(seg, rel, hd, slot, out),
-            8 => self.cached_group::<8>(seg, rel, hd, slot, out),
-            _ => self.cached_group_any(seg, rel, hd, slot, out),
+    fn slot_group(&self, nkm: i32, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        // k, and 32 more for a single curve (see [`pack`]).
+        match nkm as u32 >> 18 & 0x3F {
+            33 => Self::curve(slot, pose),
+            1 => self.cached_group::<1>(slot, pose),
+            2 => self.cached_group::<2>(slot, pose),
+            3 => self.cached_group::<3>(slot, pose),
+            4 => self.cached_group::<4>(slot, pose),
+            5 => self.cached_group::<5>(slot, pose),
+            6 => self.cached_group::<6>(slot, pose),
+            7 => self.cached_group::<7>(slot, pose),
+            8 => self.cached_group::<8>(slot, pose),
+            _ => self.cached_group_any(slot, pose),
         }
     }
 
     /// Evaluates a cached group of `K` components whose slot, after its head
     /// `hd`, is `slot` (key interval, control points); refills the slot when
-    /// `rel` left its interval. Returns the slots after it.
+    /// `rel` left its interval.
     #[inline(never)]
-    fn cached_group<'s, const K: usize>(
-        &self,
-        seg: &Segment<'a>,
-        rel: u32,
-        hd: [i32; GROUP_HEAD],
-        slot: &'s mut [i32],
-        out: &mut [i32],
-    ) -> Option<&'s mut [i32]> {
-        let [rec, dst, nkm] = hd;
+    fn cached_group<const K: usize>(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        // Nothing to report: on a validated clip every step succeeds (and
+        // returning nothing keeps a register free in the channel loops).
+        let _ = self.group_k::<K>(slot, pose);
+    }
+
+    #[inline(always)]
+    fn group_k<const K: usize>(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
+        let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
+        let (body, rel) = (pose.body, pose.rel);
         let (n, _, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
-        let (controls, rest) = rest.split_at_mut_checked(4 * K)?;
+        let controls = rest.get_mut(..4 * K)?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
-            None => refill_slot(seg.body, rec, n, rel, iv, controls)?,
+            None => refill_slot(body, rec, n, K, rel, iv, controls)?,
         };
         let a = coefficients::<K>(w, controls);
-        let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
-        self.target(dst, n, out)?.write_k::<K>(a, means, basis, ms);
-        Some(rest)
+        let (means, basis) = body.get(rec + 2..)?.split_at_checked(2 * n)?;
+        self.target(dst, n, pose.out)?
+            .write_k::<K>(a, means, basis, ms);
+        Some(())
     }
 
     /// [`Self::cached_group`] for any `k`.
-    fn cached_group_any<'s>(
-        &self,
-        seg: &Segment<'a>,
-        rel: u32,
-        hd: [i32; GROUP_HEAD],
-        slot: &'s mut [i32],
-        out: &mut [i32],
-    ) -> Option<&'s mut [i32]> {
-        let [rec, dst, nkm] = hd;
+    fn cached_group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        let _ = self.group_any(slot, pose);
+    }
+
+    fn group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
+        let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
+        let (body, rel) = (pose.body, pose.rel);
         let (n, k, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
-        let (controls, rest) = rest.split_at_mut_checked(4 * k)?;
+        let controls = rest.get_mut(..4 * k)?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
-            None => refill_slot(seg.body, rec, n, rel, iv, controls)?,
+            None => refill_slot(body, rec, n, k, rel, iv, controls)?,
         };
-        let (means, basis) = seg.body.get(rec + 2..)?.split_at_checked(2 * n)?;
+        let (means, basis) = body.get(rec + 2..)?.split_at_checked(2 * n)?;
         let basis = basis.get(..n * k)?;
-        self.target(dst, n, out)?
+        self.target(dst, n, pose.out)?
             .write(k, w, controls, means, basis, ms);
-        Some(rest)
+        Some(())
+    }
+
+    /// A cached group of one channel (a run at `hd[1]`) and one component — a
+    /// single curve (root translations, heading): [`Self::cached_group`]
+    /// without a channel loop and with the record's five leading bytes (k, ms,
+    /// mean, basis entry) read at once.
+    #[inline(never)]
+    fn curve(slot: &mut [i32], pose: &mut Pose<'a, '_>) {
+        let _ = Self::curve_at(slot, pose);
+    }
+
+    #[inline(always)]
+    fn curve_at(slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
+        let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
+        let (body, rel) = (pose.body, pose.rel);
+        let rec = rec as usize;
+        let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
+        let controls = rest.first_chunk_mut::<4>()?;
+        let w = match cached_weights(iv, rel) {
+            Some(w) => w,
+            None => refill_slot(body, rec, 1, 1, rel, iv, controls)?,
+        };
+        let a = spline::apply(w, *controls);
+        let &[_, _, m0, m1, b] = body.get(rec..rec.wrapping_add(5))? else {
+            return None;
+        };
+        let ms = (nkm as u32) >> 24 & 0x1F;
+        let mean = i32::from(i16::from_le_bytes([m0, m1]));
+        let acc = (1i32 << (BASIS_SHIFT - 1)).wrapping_add(i32::from(b as i8).wrapping_mul(a));
+        *pose.out.get_mut(dst as usize)? = mean.wrapping_shl(ms).wrapping_add(acc >> BASIS_SHIFT);
+        Some(())
     }
 
     /// Where the values of a cached group go (its slot's `dst` word).
@@ -693,8 +748,16 @@ impl<'a> PcaSplineCodec<'a> {
         })
     }
 
-    /// Fills the cache head and as many group slots as fit for `seg`.
-    fn prepare(&self, seg: &Segment<'a>, owner: i32, head: &mut [i32], slots: &mut [i32]) {
+    /// Fills the cache head and as many group slots as fit for `seg`, each
+    /// group's key interval the one holding `rel`.
+    fn prepare(
+        &self,
+        seg: &Segment<'a>,
+        owner: i32,
+        rel: u32,
+        head: &mut [i32],
+        slots: &mut [i32],
+    ) {
         let mut g = Reader::new(self.groups);
         let mut body = Reader::new(seg.body);
         let total = slots.len();
@@ -725,15 +788,17 @@ impl<'a> PcaSplineCodec<'a> {
                 break;
             };
             let dst = self.dst_word(idx, idx_at, n);
-            *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift)];
+            *hd = [rec as i32, dst, pack(n, group.k, group.mean_shift, dst)];
             if group.k == 0 {
                 let mut values = GroupValues::new(&group, &[]);
                 for v in rest.iter_mut() {
                     *v = values.next().unwrap_or(0);
                 }
-            } else if let Some((iv, _)) = rest.split_first_chunk_mut::<INTERVAL>() {
-                // An empty interval: the first pose fills it.
+            } else if let Some((iv, controls)) = rest.split_first_chunk_mut::<INTERVAL>() {
+                // The interval holding `rel`, as the pose's refill of an
+                // empty slot would find it, from the record at hand.
                 *iv = Cached::EMPTY;
+                group.refill(Cached::of(iv), rel, iv, controls);
             }
         }
         // The constants' values too, if they fit after the slots.
@@ -865,9 +930,12 @@ fn cached_weights(iv: &[i32; INTERVAL], rel: u32) -> Option<[i32; 4]> {
     ))
 }
 
-/// `n | k << 18 | ms << 23` (n ≤ 2^17 channels, k ≤ 16, ms ≤ 16).
-fn pack(n: usize, k: usize, ms: u32) -> i32 {
-    (n as u32 | (k as u32) << 18 | ms << 23) as i32
+/// `n | k << 18 | c << 23 | ms << 24` (n ≤ 2^17 channels, k ≤ 16, ms ≤ 16)
+/// with `c` set for a single curve (one channel, a run at `dst`, one
+/// component), so `nkm >> 18 & 0x3F` dispatches a slot.
+fn pack(n: usize, k: usize, ms: u32, dst: i32) -> i32 {
+    let curve = u32::from(n == 1 && k == 1 && dst >= 0);
+    (n as u32 | (k as u32) << 18 | curve << 23 | ms << 24) as i32
 }
 
 fn unpack(nkm: i32) -> (usize, usize, u32) {
@@ -875,7 +943,7 @@ fn unpack(nkm: i32) -> (usize, usize, u32) {
     (
         (v & 0x3_FFFF) as usize,
         (v >> 18 & 0x1F) as usize,
-        v >> 23 & 0x1F,
+        v >> 24 & 0x1F,
     )
 }
 
@@ -912,7 +980,7 @@ impl GroupHead<'_> {
     fn controls(&self, i: u32, mut each: impl FnMut([i32; 4])) {
         let last = self.keys.saturating_sub(1);
         let rows = [i.saturating_sub(1), i, i + 1, (i + 2).min(last)];
-        let mut readers = rows.map(|row| BitReader::at(self.bits, self.key_row(row)));
+        let mut at = rows.map(|row| self.key_row(row));
         let mut comps = Reader::new(self.comps);
         for _ in 0..self.k {
             let (Some(wd), Some(sh), Some(off)) = (comps.u8(), comps.u8(), comps.zigzag_i32())
@@ -920,17 +988,21 @@ impl GroupHead<'_> {
                 return;
             };
             let (wd, sh) = (u32::from(wd), u32::from(sh));
-            each(
-                readers
-                    .each_mut()
-                    .map(|r| off.wrapping_add((read_wide(r, wd) as i32).wrapping_shl(sh))),
-            );
+            each(at.each_mut().map(|bit| {
+                let v = bits_at64(self.bits, *bit, wd) as i32;
+                *bit = bit.wrapping_add(u64::from(wd));
+                off.wrapping_add(v.wrapping_shl(sh))
+            }));
         }
     }
 
     /// Key time `i`.
     fn time(&self, i: u32) -> u32 {
-        BitReader::at(self.bits, u64::from(i) * u64::from(self.time_bits)).read(self.time_bits)
+        bits_at64(
+            self.bits,
+            u64::from(i) * u64::from(self.time_bits),
+            self.time_bits,
+        )
     }
 
     /// The bit position of key row `row`.
@@ -1058,8 +1130,16 @@ impl<'i, 'o> Dst<'i, 'o> {
     /// Writes `values` (one per channel).
     fn copy(self, values: &[i32]) {
         if let Dst::Run(dst) = self {
-            if let Some(src) = values.get(..dst.len()) {
-                dst.copy_from_slice(src);
+            // Pairs of words (short groups: a call to memcpy costs more).
+            let mut pairs = dst.chunks_exact_mut(2);
+            let mut from = values.chunks_exact(2);
+            for (d, s) in (&mut pairs).zip(&mut from) {
+                if let ([d0, d1], &[s0, s1]) = (d, s) {
+                    (*d0, *d1) = (s0, s1);
+                }
+            }
+            if let ([d], [s, ..]) = (pairs.into_remainder(), from.remainder()) {
+                *d = *s;
             }
             return;
         }
@@ -1160,14 +1240,173 @@ fn refill_slot(
     body: &[u8],
     rec: usize,
     n: usize,
+    k: usize,
     rel: u32,
     iv: &mut [i32; INTERVAL],
     controls: &mut [i32],
 ) -> Option<[i32; 4]> {
+    if next_interval(body, rec, n, k, rel, iv, controls).is_none() {
+        refill_search(body, rec, n, rel, iv, controls)?;
+    }
+    cached_weights(iv, rel)
+}
+
+/// [`refill_slot`] when the step is not sequential: the record parsed, the
+/// interval searched (out of line: rare, and its frame is large).
+#[inline(never)]
+fn refill_search(
+    body: &[u8],
+    rec: usize,
+    n: usize,
+    rel: u32,
+    iv: &mut [i32; INTERVAL],
+    controls: &mut [i32],
+) -> Option<()> {
     let mut body = Reader::new(body.get(rec..)?);
     let group = read_group(&mut body, n)?;
     group.refill(Cached::of(iv), rel, iv, controls);
-    cached_weights(iv, rel)
+    Some(())
+}
+
+/// The sequential step of [`GroupHead::refill`] without parsing the whole
+/// record: when `rel` lies in the interval after the one in `iv`, shifts
+/// the `k` components' control points by one key, reads the new key's
+/// time and row (located from `n` and `k`: the record at `rec` was
+/// validated when the clip was parsed) and stores the next interval.
+/// `None` (nothing changed) when the step is not sequential.
+#[inline(always)]
+fn next_interval(
+    body: &[u8],
+    rec: usize,
+    n: usize,
+    k: usize,
+    rel: u32,
+    iv: &mut [i32; INTERVAL],
+    controls: &mut [i32],
+) -> Option<()> {
+    let at = Cached::of(iv);
+    // The record: k, ms, n means (2 bytes), n × k basis, then m and tb.
+    let keys_at = rec.wrapping_add(2).wrapping_add(n.wrapping_mul(k + 2));
+    let mut r = Reader::new(body.get(keys_at..)?);
+    let keys = r.varint_u32()?;
+    let tb = u32::from(r.u8()?);
+    let last = keys.saturating_sub(1);
+    let next = at.i.wrapping_add(1);
+    let sequential = at.tb != at.t2
+        && at.t2 << FRAC_BITS <= rel
+        && (rel < at.tb << FRAC_BITS || next.wrapping_add(1) == last)
+        && next < last;
+    if !sequential {
+        return None;
+    }
+    let comps = r.rest();
+    let mut row_bits = 0usize;
+    let mut p = 0;
+    for _ in 0..k {
+        let (wd, _, _, next) = comp_at(comps, p)?;
+        row_bits = row_bits.wrapping_add(wd as usize);
+        p = next;
+    }
+    let bits = comps.get(p..)?;
+    let key = next.wrapping_add(2).min(last) as usize;
+    let tb = tb as usize;
+    let tc = bits_at(bits, key.wrapping_mul(tb), tb as u32);
+    let mut bit = (keys as usize)
+        .wrapping_mul(tb)
+        .wrapping_add(key.wrapping_mul(row_bits));
+    let mut p = 0;
+    for d in controls.chunks_exact_mut(4).take(k) {
+        let Some((wd, sh, off, next)) = comp_at(comps, p) else {
+            break;
+        };
+        p = next;
+        let v = bits_at(bits, bit, wd) as i32;
+        bit = bit.wrapping_add(wd as usize);
+        let p = off.wrapping_add(v.wrapping_shl(sh));
+        if let [a, b, c, e] = d {
+            [*a, *b, *c, *e] = [*b, *c, *e, p];
+        }
+    }
+    let t = [at.t1, at.t2, at.tb, tc];
+    let (ra, rb) = spline::ratios(t);
+    Cached {
+        i: next,
+        t1: at.t2,
+        t2: at.tb,
+        tb: tc,
+        ra,
+        rb,
+    }
+    .store(iv);
+    Some(())
+}
+
+/// The component record (§5.3: u8 width, u8 shift, zigzag offset) at byte
+/// `p` of `comps`: width, shift, offset and the byte after it. One- and
+/// offsets of up to three bytes (almost all) without a [`Reader`].
+#[inline(always)]
+fn comp_at(comps: &[u8], p: usize) -> Option<(u32, u32, i32, usize)> {
+    let zigzag = |u: u32| ((u >> 1) as i32) ^ -((u & 1) as i32);
+    match comps.get(p..)? {
+        &[wd, sh, o, ..] if o < 0x80 => Some((wd.into(), sh.into(), zigzag(o.into()), p + 3)),
+        &[wd, sh, o, o2, ..] if o2 < 0x80 => {
+            let u = u32::from(o & 0x7F) | u32::from(o2) << 7;
+            Some((wd.into(), sh.into(), zigzag(u), p + 4))
+        }
+        &[wd, sh, o, o2, o3, ..] if o3 < 0x80 => {
+            let u = u32::from(o & 0x7F) | u32::from(o2 & 0x7F) << 7 | u32::from(o3) << 14;
+            Some((wd.into(), sh.into(), zigzag(u), p + 5))
+        }
+        rest => {
+            let mut r = Reader::new(rest);
+            let (wd, sh, off) = (r.u8()?, r.u8()?, r.zigzag_i32()?);
+            Some((wd.into(), sh.into(), off, p + r.pos()))
+        }
+    }
+}
+
+/// `n ≤ 30` bits of `bytes` from bit `bit`, LSB-first (§4.4); bits past
+/// the end read as zero, like [`BitReader`].
+#[inline(always)]
+fn bits_at(bytes: &[u8], bit: usize, n: u32) -> u32 {
+    let at = bit >> 3;
+    if n <= 25 {
+        // 25 bits past a shift of at most 7 fit in one 32-bit window.
+        if let Some(&[a, b, c, d]) = bytes.get(at..at.wrapping_add(4)) {
+            let word = u32::from_le_bytes([a, b, c, d]);
+            return (word >> (bit & 7)) & 1u32.wrapping_shl(n).wrapping_sub(1);
+        }
+    }
+    let word = match bytes.get(at..at.wrapping_add(8)) {
+        Some(&[a, b, c, d, e, f, g, h]) => u64::from_le_bytes([a, b, c, d, e, f, g, h]),
+        _ => tail_word(bytes, at),
+    };
+    ((word >> (bit & 7)) as u32) & 1u32.wrapping_shl(n).wrapping_sub(1)
+}
+
+/// [`bits_at`] at a 64-bit bit position.
+#[inline(always)]
+fn bits_at64(bytes: &[u8], bit: u64, n: u32) -> u32 {
+    match usize::try_from(bit) {
+        Ok(bit) if bit < usize::MAX - 64 => bits_at(bytes, bit, n),
+        _ => 0,
+    }
+}
+
+/// The eight bytes of `bytes` from `at` as a little-endian word, zeros past
+/// the end.
+#[inline(never)]
+fn tail_word(bytes: &[u8], at: usize) -> u64 {
+    let mut word = 0u64;
+    for i in 0..8 {
+        let b = at
+            .checked_add(i)
+            .and_then(|j| bytes.get(j))
+            .copied()
+            .unwrap_or(0);
+        word |= u64::from(b) << (8 * i);
+    }
+    word
 }
 
 /// The `K` component values at spline weights `w` from their control
@@ -1303,13 +1542,12 @@ fn read_group<'a>(r: &mut Reader<'a>, n: usize) -> Option<GroupHead<'a>> {
     let comps_at = r.clone();
     let mut row_bits = 0u32;
     for _ in 0..k {
-        let w = r.u8()?;
-        let s = r.u8()?;
-        if w > MAX_VALUE_BITS || s > MAX_VALUE_SHIFT {
+        let (w, s, _, len) = comp_at(r.clone().rest(), 0)?;
+        r.take(len)?;
+        if w > u32::from(MAX_VALUE_BITS) || s > u32::from(MAX_VALUE_SHIFT) {
             return None;
         }
-        r.zigzag_i32()?;
-        row_bits += u32::from(w);
+        row_bits += w;
     }
     head.comps = comps_at.clone().take(r.pos() - comps_at.pos())?;
     head.row_bits = row_bits;
