@@ -208,11 +208,12 @@ impl<'a> Header<'a> {
     pub(crate) fn parse(bytes: &'a [u8], compact: bool) -> Result<Self, Error> {
         let mut r = Reader::new(bytes);
         let malformed = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
-        if compact && r.clone().varint_u32() == Some(0) {
-            return Self::parse_servo(bytes);
+        let frame_time_ns = r.varint_u32().ok_or_else(|| malformed(&r))?;
+        // A frame time is never 0: in section 0x02 a 0 marks the servo form.
+        if compact && frame_time_ns == 0 {
+            return Self::parse_servo(bytes, r);
         }
         let form = if compact { Form::Compact } else { Form::Full };
-        let frame_time_ns = r.varint_u32().ok_or_else(|| malformed(&r))?;
         let frame_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
         let source_unit_nm = r.varint_u32().ok_or_else(|| malformed(&r))?;
         if frame_time_ns == 0 || frame_count == 0 {
@@ -275,15 +276,10 @@ impl<'a> Header<'a> {
         })
     }
 
-    /// The servo form of section `0x02` (§3.4.1): `varint 0`, frame time,
-    /// frame count, servo count.
-    fn parse_servo(bytes: &'a [u8]) -> Result<Self, Error> {
-        let mut r = Reader::new(bytes);
+    /// The servo form of section `0x02` (§3.4.1) after its `varint 0`:
+    /// frame time, frame count, servo count.
+    fn parse_servo(bytes: &'a [u8], mut r: Reader<'a>) -> Result<Self, Error> {
         let malformed = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
-        let marker = r.varint_u32().ok_or_else(|| malformed(&r))?;
-        if marker != 0 {
-            return Err(malformed(&r));
-        }
         let frame_time_ns = r.varint_u32().ok_or_else(|| malformed(&r))?;
         let frame_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
         if frame_time_ns == 0 || frame_count == 0 {

@@ -54,3 +54,11 @@ pub use rig::{tick_count, tick_us, Rig, RigServo};
 pub mod spline {
     pub use crate::codec::spline::{apply, weights};
 }
+
+/// The prediction and reconstruction of the `predictive` codec (SPEC.md
+/// §5b), public so the encoder quantises against exactly what the decoder
+/// computes.
+#[cfg(feature = "codec-predictive")]
+pub mod predictive {
+    pub use crate::codec::predictive::{predict, value};
+}

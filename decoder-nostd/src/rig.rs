@@ -47,6 +47,17 @@ pub struct RigServo {
 }
 
 impl RigServo {
+    /// The pulse at `angle_mdeg` on the line through this servo's two
+    /// ends, not clamped, division truncating toward zero — how the compact
+    /// rig table's `SAME_MAP` gives the next servo its pulses (SPEC.md
+    /// §3.5.1); `None` if it does not fit a `u16`.
+    pub fn line_qus(&self, angle_mdeg: i64) -> Option<u16> {
+        let (a0, a1) = (i64::from(self.angle_lo_mdeg), i64::from(self.angle_hi_mdeg));
+        let (q0, q1) = (i64::from(self.pulse_lo_qus), i64::from(self.pulse_hi_qus));
+        let q = q0 + angle_mdeg.checked_sub(a0)?.checked_mul(q1 - q0)? / (a1 - a0).max(1);
+        u16::try_from(q).ok()
+    }
+
     /// The pulse for a decoded angle: clamped to the travel, then linear
     /// between the two ends, rounded half up (integer arithmetic).
     pub fn pulse_qus(&self, angle_mdeg: i32) -> u16 {
@@ -231,19 +242,15 @@ fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<Rig
         let span = i64::from(r.varint_u32()?).checked_mul(unit)?;
         let lo32 = i32::try_from(lo).ok()?;
         let hi32 = i32::try_from(lo.checked_add(span)?).ok()?;
-        let (p0, p1) = if has(flag::SAME_MAP) {
-            // The previous servo's line, truncating division (§3.5.1).
+        let (pulse_lo, pulse_hi) = if has(flag::SAME_MAP) {
             let p = prev?;
-            let (a0, a1) = (i64::from(p.angle_lo_mdeg), i64::from(p.angle_hi_mdeg));
-            let (q0, q1) = (i64::from(p.pulse_lo_qus), i64::from(p.pulse_hi_qus));
-            let at = |a: i64| q0 + (a - a0) * (q1 - q0) / (a1 - a0).max(1);
-            (at(lo), at(lo + span))
+            (p.line_qus(lo)?, p.line_qus(lo + span)?)
         } else {
             let p0 = r.varint_u32()?;
-            let dp = r.zigzag_i32()?;
-            (i64::from(p0), i64::from(p0).checked_add(i64::from(dp))?)
+            let p1 = i64::from(p0).checked_add(i64::from(r.zigzag_i32()?))?;
+            (u16::try_from(p0).ok()?, u16::try_from(p1).ok()?)
         };
-        (lo32, hi32, u16::try_from(p0).ok()?, u16::try_from(p1).ok()?)
+        (lo32, hi32, pulse_lo, pulse_hi)
     };
     let neutral_qus = if has(flag::MID_NEUTRAL) {
         // Both pulses fit u16, so the sum fits u32.
@@ -276,7 +283,6 @@ fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<Rig
 }
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used, clippy::indexing_slicing)]
 mod tests {
     use super::*;
 
@@ -305,15 +311,15 @@ mod tests {
     }
 
     /// SPEC.md §3.5.1's example: two servos, the second all "as before".
-    const COMPACT: &[u8] = &[
+    const COMPACT: [u8; 15] = [
         0x00, 0xD0, 0x86, 0x03, 0x02, //
         0x2D, 0x59, 0x5A, 0xA0, 0x1F, 0xC0, 0x3E, 0xAC, 0x02, //
         0x1B,
     ];
 
     #[test]
-    fn compact_table_reads_the_spec_example() {
-        let rig = Rig::parse(COMPACT, 2).unwrap();
+    fn compact_table_reads_the_spec_example() -> Result<(), Error> {
+        let rig = Rig::parse(&COMPACT, 2)?;
         assert!(rig.is_compact());
         assert_eq!(rig.rate_mhz(), 50_000);
         let want = RigServo {
@@ -329,29 +335,55 @@ mod tests {
         assert_eq!(servos.next(), Some(want));
         assert_eq!(servos.next(), Some(RigServo { output: 1, ..want }));
         assert_eq!(servos.next(), None);
+        Ok(())
     }
 
     #[test]
     fn compact_table_rejects_bad_flags_and_truncation() {
-        assert!(Rig::parse(COMPACT, 3).is_err());
+        assert!(Rig::parse(&COMPACT, 3).is_err());
         for cut in 1..COMPACT.len() {
-            assert!(Rig::parse(&COMPACT[..cut], 2).is_err(), "cut at {cut}");
+            let short = COMPACT.get(..cut).unwrap_or(&[]);
+            assert!(Rig::parse(short, 2).is_err(), "cut at {cut}");
         }
         let with = |at: usize, v: u8| {
-            let mut b = COMPACT.to_vec();
-            b[at] = v;
+            let mut b = COMPACT;
+            if let Some(x) = b.get_mut(at) {
+                *x = v;
+            }
             b
         };
-        // An undefined bit; "as before" on the first servo; ANGLE_DEG with
-        // SAME_RANGE; SPEED_DEG with SAME_SPEED.
+        // An undefined bit; SAME_MAP, SAME_RANGE, SAME_SPEED on the first
+        // servo; ANGLE_DEG with SAME_RANGE; SPEED_DEG with SAME_SPEED.
+        assert!(Rig::parse(&with(5, 0xAD), 2).is_err());
         assert!(Rig::parse(&with(5, 0x6D), 2).is_err());
         assert!(Rig::parse(&with(5, 0x2B), 2).is_err());
         assert!(Rig::parse(&with(5, 0x1D), 2).is_err());
         assert!(Rig::parse(&with(14, 0x1F), 2).is_err());
         assert!(Rig::parse(&with(14, 0x3B), 2).is_err());
         // Trailing bytes.
-        let mut long = COMPACT.to_vec();
-        long.push(0x1B);
+        let mut long = [0x1B; 16];
+        for (l, &c) in long.iter_mut().zip(&COMPACT) {
+            *l = c;
+        }
         assert!(Rig::parse(&long, 2).is_err());
+    }
+
+    #[test]
+    fn same_map_follows_the_previous_servos_line() {
+        let s = RigServo {
+            output: 0,
+            angle_lo_mdeg: -45_000,
+            angle_hi_mdeg: 45_000,
+            pulse_lo_qus: 4000,
+            pulse_hi_qus: 8000,
+            neutral_qus: 6000,
+            max_speed_mdeg_s: 0,
+        };
+        // Extrapolated past the travel, truncating toward zero.
+        assert_eq!(s.line_qus(-90_000), Some(2000));
+        assert_eq!(s.line_qus(-36_000), Some(4400));
+        assert_eq!(s.line_qus(1), Some(6000));
+        assert_eq!(s.line_qus(-1), Some(5999));
+        assert_eq!(s.line_qus(i64::from(i32::MAX)), None);
     }
 }

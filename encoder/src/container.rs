@@ -58,7 +58,7 @@ impl HeaderWire {
     pub fn new(m: &Motion, metres_per_unit: f64, decoded: &FixedChannels) -> HeaderWire {
         let um = metres_per_unit * 1e6;
         HeaderWire {
-            frame_time_ns: (m.frame_time * 1e9).round().clamp(1.0, u32::MAX as f64) as u32,
+            frame_time_ns: frame_time_ns(m.frame_time),
             frame_count: m.frames() as u32,
             source_unit_nm: (metres_per_unit * 1e9).round().clamp(1.0, u32::MAX as f64) as u32,
             joints: m
@@ -131,6 +131,56 @@ impl HeaderWire {
             varint(&mut out, (hi - i64::from(lo)) as u32);
         }
         out
+    }
+}
+
+/// A frame time in seconds as the header stores it: whole nanoseconds
+/// (SPEC.md §3.2).
+pub fn frame_time_ns(seconds: f64) -> u32 {
+    (seconds * 1e9).round().clamp(1.0, f64::from(u32::MAX)) as u32
+}
+
+/// A reading position in a section's bytes, for inspecting what the
+/// encoder wrote (`mocap info`); the decoder has its own, crate-private.
+pub struct ByteCursor<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> ByteCursor<'a> {
+    /// A cursor at the start of `bytes`.
+    pub fn new(bytes: &'a [u8]) -> Self {
+        ByteCursor { bytes, at: 0 }
+    }
+
+    /// Bytes read so far.
+    pub fn pos(&self) -> usize {
+        self.at
+    }
+
+    /// One byte.
+    pub fn u8(&mut self) -> Option<u8> {
+        let v = *self.bytes.get(self.at)?;
+        self.at += 1;
+        Some(v)
+    }
+
+    /// Skips `n` bytes (`None` past the end).
+    pub fn skip(&mut self, n: usize) -> Option<()> {
+        (self.at + n <= self.bytes.len()).then(|| self.at += n)
+    }
+
+    /// A varint as [`varint`] writes it.
+    pub fn varint(&mut self) -> Option<u32> {
+        let mut v = 0u32;
+        for i in 0..5 {
+            let b = self.u8()?;
+            v |= u32::from(b & 0x7F) << (7 * i);
+            if b & 0x80 == 0 {
+                return Some(v);
+            }
+        }
+        None
     }
 }
 

@@ -501,16 +501,27 @@ pub fn pca_groups(m: &Motion, min_channels: usize) -> Vec<Vec<usize>> {
     tracks
 }
 
+/// What every codec's search starts from, computed once per encode.
+struct Prepared {
+    /// The motion in fixed point.
+    fixed: FixedChannels,
+    /// Joint positions of the input, mm (`[joint][xyz]` per frame).
+    original_mm: Vec<[f64; 3]>,
+    /// Lever arm of each joint, µm.
+    levers_um: Vec<f64>,
+    /// Joint of each channel.
+    joint_of: Vec<usize>,
+}
+
 /// Encodes with `pca-spline`, searching the tolerance `τ` (log-bisection)
 /// for the smallest clip whose decoded output meets the bound.
-fn encode_pca(
-    m: &Motion,
-    fixed: &FixedChannels,
-    opts: &EncodeOptions,
-    original_mm: &[[f64; 3]],
-    levers_um: &[f64],
-    joint_of: &[usize],
-) -> Result<Encoded, String> {
+fn encode_pca(m: &Motion, input: &Prepared, opts: &EncodeOptions) -> Result<Encoded, String> {
+    let Prepared {
+        fixed,
+        original_mm,
+        levers_um,
+        joint_of,
+    } = input;
     let mm = opts.bound.positional();
     let weights = pca_weights(
         m,
@@ -604,51 +615,64 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, String> {
             m.channels()
         ));
     }
-    let fixed = fixed::to_fixed(m, opts.metres_per_unit);
-    let original_mm = metrics::positions_mm(m, opts.metres_per_unit);
-    let levers_um: Vec<f64> = kinematics::lever_arms(&m.skeleton)
-        .into_iter()
-        .map(|l| l * opts.metres_per_unit * 1e6)
-        .collect();
-    let joint_of = m.skeleton.channel_joints();
-    match opts.codec {
-        CodecChoice::Index | CodecChoice::Predictive => {}
-        CodecChoice::PcaSpline => {
-            return encode_pca(m, &fixed, opts, &original_mm, &levers_um, &joint_of)
+    let input = Prepared {
+        fixed: fixed::to_fixed(m, opts.metres_per_unit),
+        original_mm: metrics::positions_mm(m, opts.metres_per_unit),
+        levers_um: kinematics::lever_arms(&m.skeleton)
+            .into_iter()
+            .map(|l| l * opts.metres_per_unit * 1e6)
+            .collect(),
+        joint_of: m.skeleton.channel_joints(),
+    };
+    let with = |codec| {
+        let one = EncodeOptions {
+            codec,
+            ..opts.clone()
+        };
+        match codec {
+            CodecChoice::PcaSpline => encode_pca(m, &input, &one),
+            _ => encode_by_tolerance(m, &input, &one),
         }
-        CodecChoice::Auto => {
-            let mut errors = Vec::new();
-            let mut best: Option<Encoded> = None;
-            for codec in [
-                CodecChoice::Index,
-                CodecChoice::PcaSpline,
-                CodecChoice::Predictive,
-            ] {
-                let one = EncodeOptions {
-                    codec,
-                    ..opts.clone()
-                };
-                let r = if codec == CodecChoice::PcaSpline {
-                    encode_pca(m, &fixed, &one, &original_mm, &levers_um, &joint_of)
-                } else {
-                    encode(m, &one)
-                };
-                match r {
-                    Ok(e) if best.as_ref().is_none_or(|b| e.bytes.len() < b.bytes.len()) => {
-                        best = Some(e)
-                    }
-                    Ok(_) => {}
-                    Err(e) => errors.push(format!("{}: {e}", crate::bench::codec_name(codec))),
-                }
-            }
-            return best.ok_or_else(|| errors.join("; "));
+    };
+    if opts.codec != CodecChoice::Auto {
+        return with(opts.codec);
+    }
+    // Every codec; the smallest clip that meets the bound.
+    let mut errors = Vec::new();
+    let mut best: Option<Encoded> = None;
+    for codec in [
+        CodecChoice::Index,
+        CodecChoice::PcaSpline,
+        CodecChoice::Predictive,
+    ] {
+        match with(codec) {
+            Ok(e) if best.as_ref().is_none_or(|b| e.bytes.len() < b.bytes.len()) => best = Some(e),
+            Ok(_) => {}
+            Err(e) => errors.push(format!("{}: {e}", crate::bench::codec_name(codec))),
         }
     }
+    best.ok_or_else(|| errors.join("; "))
+}
+
+/// Encodes with a codec driven by per-channel tolerances (`index`,
+/// `predictive`): tightens an angle bound, or bisects the position budget
+/// of a millimetre bound, until the decoded clip meets the bound.
+fn encode_by_tolerance(
+    m: &Motion,
+    input: &Prepared,
+    opts: &EncodeOptions,
+) -> Result<Encoded, String> {
+    let Prepared {
+        fixed,
+        original_mm,
+        levers_um,
+        joint_of,
+    } = input;
     let mut attempts = 0;
     let mut tighten = 1.0;
     let run = |s_um: Option<f64>, tighten: f64| {
-        let tol = tolerances(&fixed, opts, &levers_um, &joint_of, s_um, tighten);
-        attempt(m, &fixed, &tol, opts, &original_mm)
+        let tol = tolerances(fixed, opts, levers_um, joint_of, s_um, tighten);
+        attempt(m, fixed, &tol, opts, original_mm)
     };
     let best = match opts.bound.position_mm {
         None => loop {

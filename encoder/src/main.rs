@@ -172,8 +172,8 @@ enum Command {
         /// carousel for a lossy line without a way back. The firmware keeps each chunk from
         /// whichever pass brings it intact and starts the clip once it has every chunk and a
         /// `Play`; a `Play` that comes first is remembered. At 1 % corrupted bytes the demo's
-        /// 22-chunk clip arrives whole with 1 pass never, 8 passes 87 %, 13 passes 99 %
-        /// (BENCHMARKS.md §5). Each pass costs the clip's bytes again.
+        /// 19-chunk servo clip arrives whole with 1 pass never, 8 passes 87 %, 16 passes
+        /// 100 % (BENCHMARKS.md §5). Each pass costs the clip's bytes again.
         #[arg(long, default_value_t = 1, conflicts_with = "poses",
               value_parser = clap::value_parser!(u32).range(1..))]
         passes: u32,

@@ -9,7 +9,7 @@ use mocap_decoder::consts::rig_flag as flag;
 use mocap_decoder::{consts, tick_count, tick_us, Clip, RigServo};
 
 use crate::clipfile;
-use crate::container::{assemble, varint, zigzag};
+use crate::container::{assemble, frame_time_ns, varint, zigzag};
 use crate::encode::{self, Bound, CodecChoice, EncodeOptions};
 use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
 use crate::rig::{Rig, Servo, ServoTracks};
@@ -116,9 +116,11 @@ pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, String> {
                 zigzag(&mut out, s.angle_lo_mdeg);
                 varint(&mut out, span);
             }
+            // SAME_MAP where the previous servo's line (the decoder's rule)
+            // gives exactly this servo's pulses.
             if prev.is_some_and(|p| {
-                on_line(&p, s.angle_lo_mdeg, s.pulse_lo_qus)
-                    && on_line(&p, s.angle_hi_mdeg, s.pulse_hi_qus)
+                p.line_qus(i64::from(s.angle_lo_mdeg)) == Some(s.pulse_lo_qus)
+                    && p.line_qus(i64::from(s.angle_hi_mdeg)) == Some(s.pulse_hi_qus)
             }) {
                 flags |= flag::SAME_MAP;
             } else {
@@ -146,15 +148,6 @@ pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, String> {
         prev = Some(s);
     }
     Ok(out)
-}
-
-/// True if servo `p`'s angle-to-pulse line gives exactly `pulse` at
-/// `angle` (SPEC.md §3.5.1 `SAME_MAP`: truncating division, exact here).
-fn on_line(p: &RigServo, angle: i32, pulse: u16) -> bool {
-    let (a0, a1) = (i64::from(p.angle_lo_mdeg), i64::from(p.angle_hi_mdeg));
-    let (q0, q1) = (i64::from(p.pulse_lo_qus), i64::from(p.pulse_hi_qus));
-    let num = (i64::from(angle) - a0) * (q1 - q0);
-    a1 > a0 && num % (a1 - a0) == 0 && q0 + num / (a1 - a0) == i64::from(pulse)
 }
 
 /// The servo form of the compact header (SPEC.md §3.4.1): `varint 0`,
@@ -216,12 +209,6 @@ pub fn decoded_pulses(clip: &Clip<'_>) -> Result<Vec<Vec<u16>>, String> {
         .collect())
 }
 
-/// The capture clip's frame time in nanoseconds, as its header stores it
-/// (SPEC.md §3.2).
-pub fn frame_time_ns(frame_time: f64) -> u32 {
-    (frame_time * 1e9).round().clamp(1.0, f64::from(u32::MAX)) as u32
-}
-
 /// The servo signals at the rig's ticks (SPEC.md §3.5 timing: `tick_count`
 /// ticks over the capture's duration, tick `i` at `tick_us(i)`): the
 /// capture-rate track interpolated linearly at each tick time, held after
@@ -255,26 +242,19 @@ pub fn tick_tracks(rig: &Rig, tracks: &ServoTracks) -> TickTracks {
     let duration_us = frames as u64 * ft_ns / 1000;
     let count = tick_count(duration_us, rate_mhz);
     let times_us: Vec<u64> = (0..count).map(|i| tick_us(i, rate_mhz)).collect();
+    let at = |angles: &[f64], us: u64| {
+        let ns = us.saturating_mul(1000);
+        let i = (ns / ft_ns) as usize;
+        match (angles.get(i), angles.get(i + 1)) {
+            (Some(&a), Some(&b)) => a + (b - a) * ((ns % ft_ns) as f64 / ft_ns as f64),
+            // Held after the last frame.
+            _ => angles.last().copied().unwrap_or(0.0),
+        }
+    };
     let angles: Vec<Vec<f64>> = tracks
         .servos
         .iter()
-        .map(|t| {
-            times_us
-                .iter()
-                .map(|&us| {
-                    let ns = us.saturating_mul(1000);
-                    let i = (ns / ft_ns) as usize;
-                    if frames == 0 {
-                        return 0.0;
-                    }
-                    if i + 1 >= frames {
-                        return t.angles[frames - 1];
-                    }
-                    let frac = (ns % ft_ns) as f64 / ft_ns as f64;
-                    t.angles[i] + (t.angles[i + 1] - t.angles[i]) * frac
-                })
-                .collect()
-        })
+        .map(|t| times_us.iter().map(|&us| at(&t.angles, us)).collect())
         .collect();
     let pulses = rig
         .servos
@@ -368,7 +348,7 @@ pub struct ServoEncodeOptions {
     pub codec: CodecChoice,
     /// Bound in degrees of servo travel.
     pub bound: Bound,
-    /// Key interval of the index codec.
+    /// Key interval of the index codec, block length of the predictive one.
     pub key_interval: Option<u16>,
     /// Coding rate.
     pub rate: ServoRate,
@@ -474,19 +454,13 @@ pub fn encode_servo_clip(
     ))
 }
 
-/// Raw 16-bit frames (one `u16` pulse per servo per frame, what Arduino
-/// exporters store) of a show: at the capture's frame rate and at the
-/// rig's tick rate, bytes.
-pub fn raw16_bytes(tracks: &ServoTracks, ticks: &TickTracks) -> (usize, usize) {
-    let s = tracks.servos.len();
-    (2 * s * tracks.frames(), 2 * s * ticks.ticks())
-}
-
-/// The summary `mocap encode --rig` prints.
+/// The summary `mocap encode --rig` prints. "Raw" is 16-bit frames (one
+/// `u16` pulse per servo per frame, what Arduino exporters store) at the
+/// capture's frame rate and at the rig's tick rate.
 pub fn report(output: &std::path::Path, rig: &Rig, tracks: &ServoTracks, sc: &ServoClip) -> String {
-    let ticks = tick_tracks(rig, tracks);
     let seconds = tracks.frames() as f64 * tracks.frame_time;
-    let (raw_capture, raw_rig) = raw16_bytes(tracks, &ticks);
+    let raw_capture = 2 * rig.servos.len() * tracks.frames();
+    let raw_rig = 2 * rig.servos.len() * sc.ticks.ticks;
     let n = sc.bytes.len() as f64;
     let sections: Vec<String> = sc
         .sections
@@ -504,7 +478,7 @@ pub fn report(output: &std::path::Path, rig: &Rig, tracks: &ServoTracks, sc: &Se
         1.0 / tracks.frame_time,
         raw_capture,
         raw_rig as f64 / n,
-        f64::from(ticks.rate_mhz) / 1000.0,
+        f64::from(rate_mhz(rig)) / 1000.0,
         raw_rig,
         sc.frame_rate_hz,
         sc.frames,

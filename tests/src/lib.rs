@@ -40,6 +40,19 @@ pub fn corpus_files(folder: &str) -> Option<Vec<PathBuf>> {
     Some(files)
 }
 
+/// The corpus file `folder/name` (the folder's first file if it is not
+/// there); `None`, with the visible skip of [`corpus_files`], without the
+/// corpus.
+pub fn corpus_file(folder: &str, name: &str) -> Option<PathBuf> {
+    let files = corpus_files(folder)?;
+    assert!(
+        !files.is_empty(),
+        "no .bvh files in the corpus folder {folder}"
+    );
+    let first = files.first().cloned();
+    files.into_iter().find(|p| p.ends_with(name)).or(first)
+}
+
 /// Prints `SKIPPED: <why>` on the real stderr, past the test harness's
 /// output capture, so a skip is always visible.
 pub fn skipped(why: &str) {

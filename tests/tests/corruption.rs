@@ -6,7 +6,7 @@
 use mocap_encoder::container::CRC32;
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, generate, units};
-use mocap_tests::{corpus_files, exercise_decoder};
+use mocap_tests::{corpus_file, exercise_decoder};
 
 /// A small deterministic PRNG (xorshift64*), so failures reproduce.
 struct Rng(u64);
@@ -101,14 +101,10 @@ fn demo_clip_mutants_never_panic() {
 
 #[test]
 fn corpus_clip_mutants_never_panic() {
-    let Some(files) = corpus_files("cmu") else {
+    let Some(file) = corpus_file("cmu", "35_17.bvh") else {
         return;
     };
-    let file = files
-        .iter()
-        .find(|p| p.ends_with("35_17.bvh"))
-        .unwrap_or(&files[0]);
-    let m = bvh::read_file(file).unwrap();
+    let m = bvh::read_file(&file).unwrap();
     let clip = encode_at(&m, "1deg", Some(16));
     let (ok, err) = hammer("35_17", &clip, 3000, 0xC0FFEE);
     eprintln!("35_17: {ok} decoded, {err} rejected");
@@ -121,14 +117,10 @@ fn pca_spline_mutants_never_panic() {
     let (ok, err) = hammer("demo pca-spline", &clip, 3000, 0xB1E5);
     eprintln!("demo pca-spline: {ok} decoded, {err} rejected");
     assert!(err > 0);
-    let Some(files) = corpus_files("cmu") else {
+    let Some(file) = corpus_file("cmu", "16_07.bvh") else {
         return;
     };
-    let file = files
-        .iter()
-        .find(|p| p.ends_with("16_07.bvh"))
-        .unwrap_or(&files[0]);
-    let m = bvh::read_file(file).unwrap();
+    let m = bvh::read_file(&file).unwrap();
     // Segments, blends and patches all occur in this clip.
     let clip = encode_with(&m, CodecChoice::PcaSpline, "50mm", None);
     let (ok, err) = hammer("16_07 pca-spline", &clip, 3000, 0xFACE);
@@ -150,14 +142,10 @@ fn predictive_mutants_never_panic() {
         eprintln!("demo predictive K={k:?}: {ok} decoded, {err} rejected");
         assert!(err > 0);
     }
-    let Some(files) = corpus_files("cmu") else {
+    let Some(file) = corpus_file("cmu", "35_17.bvh") else {
         return;
     };
-    let file = files
-        .iter()
-        .find(|p| p.ends_with("35_17.bvh"))
-        .unwrap_or(&files[0]);
-    let m = bvh::read_file(file).unwrap();
+    let m = bvh::read_file(&file).unwrap();
     let clip = encode_with(&m, CodecChoice::Predictive, "20mm", Some(64));
     let (ok, err) = hammer("35_17 predictive", &clip, 3000, 0xD1CE);
     eprintln!("35_17 predictive: {ok} decoded, {err} rejected");

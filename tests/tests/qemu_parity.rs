@@ -16,7 +16,7 @@ use mocap_decoder::Clip;
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, clipfile, generate, motion::Motion, units};
 use mocap_tests::{
-    corpus_files, data_lines, qemu_available, run_firmware, servo_demo_clip, servo_demo_clip_with,
+    corpus_file, data_lines, qemu_available, run_firmware, servo_demo_clip, servo_demo_clip_with,
     workspace_root,
 };
 
@@ -112,19 +112,11 @@ fn firmware_output_matches_host_on_three_cores() {
         return;
     }
     check("demo", &generate::animatronic_demo(), None);
-    if let Some(files) = corpus_files("cmu") {
-        let f = files
-            .iter()
-            .find(|p| p.ends_with("35_01.bvh"))
-            .unwrap_or(&files[0]);
-        check("cmu-35_01", &bvh::read_file(f).unwrap(), None);
+    if let Some(f) = corpus_file("cmu", "35_01.bvh") {
+        check("cmu-35_01", &bvh::read_file(&f).unwrap(), None);
     }
-    if let Some(files) = corpus_files("iclone-cmu") {
-        let f = files
-            .iter()
-            .find(|p| p.ends_with("002_03.bvh"))
-            .unwrap_or(&files[0]);
-        check("iclone-002_03", &bvh::read_file(f).unwrap(), Some(16));
+    if let Some(f) = corpus_file("iclone-cmu", "002_03.bvh") {
+        check("iclone-002_03", &bvh::read_file(&f).unwrap(), Some(16));
     }
 }
 
@@ -148,12 +140,8 @@ fn pca_spline_firmware_output_matches_host_on_three_cores() {
     }
     let codec = CodecChoice::PcaSpline;
     check_frames_and_samples("pca-demo", &generate::animatronic_demo(), codec, "1deg");
-    if let Some(files) = corpus_files("cmu") {
-        let f = files
-            .iter()
-            .find(|p| p.ends_with("35_01.bvh"))
-            .unwrap_or(&files[0]);
-        check_frames_and_samples("pca-cmu-35_01", &bvh::read_file(f).unwrap(), codec, "50mm");
+    if let Some(f) = corpus_file("cmu", "35_01.bvh") {
+        check_frames_and_samples("pca-cmu-35_01", &bvh::read_file(&f).unwrap(), codec, "50mm");
     }
 }
 
@@ -168,12 +156,13 @@ fn predictive_firmware_output_matches_host_on_three_cores() {
     }
     let codec = CodecChoice::Predictive;
     check_frames_and_samples("pred-demo", &generate::animatronic_demo(), codec, "0.5deg");
-    if let Some(files) = corpus_files("cmu") {
-        let f = files
-            .iter()
-            .find(|p| p.ends_with("35_01.bvh"))
-            .unwrap_or(&files[0]);
-        check_frames_and_samples("pred-cmu-35_01", &bvh::read_file(f).unwrap(), codec, "1deg");
+    if let Some(f) = corpus_file("cmu", "35_01.bvh") {
+        check_frames_and_samples(
+            "pred-cmu-35_01",
+            &bvh::read_file(&f).unwrap(),
+            codec,
+            "1deg",
+        );
     }
     let (path, bytes) = servo_demo_clip_with("servo-demo-pred", codec);
     let clip = Clip::parse(&bytes).unwrap();

@@ -148,30 +148,40 @@ impl<'a> PredictiveCodec<'a> {
                 continue;
             }
             let step = i64::from(mode >> MODE_STEP_SHIFT) * unit;
-            let (p1, p2) = (i64::from(*x1), i64::from(*x2));
-            let pred = match j {
-                0 => 0,
-                1 => p1,
-                _ => {
-                    let a = PREDICTOR_WEIGHTS
-                        .get((mode & 3) as usize)
-                        .copied()
-                        .unwrap_or(0);
-                    p1 + ((a * (p1 - p2)) >> 2)
-                }
-            };
+            let pred = predict(j, *x1, *x2, (mode & 3) as usize);
             let q = rc.residual(probs, (*cx as usize).min(CONTEXTS - 1));
             *x2 = *x1;
-            // Two's-complement wrap into i32 (SPEC.md §5b); most residuals
-            // are 0, which needs no 64-bit multiply.
-            *x1 = if q == 0 {
-                pred as i32
-            } else {
-                pred.wrapping_add(q.wrapping_mul(step)) as i32
-            };
+            *x1 = value(pred, q, step);
             *cx = q.unsigned_abs().min(2) as i32;
         }
         rc.store(coder);
+    }
+}
+
+/// The prediction of a coded channel at frame `j` of its block from its
+/// last two values and predictor `weight` (mode bits 0–1), SPEC.md §5b.
+#[inline(always)]
+pub fn predict(j: u32, v1: i32, v2: i32, weight: usize) -> i64 {
+    let (p1, p2) = (i64::from(v1), i64::from(v2));
+    match j {
+        0 => 0,
+        1 => p1,
+        _ => {
+            let a = PREDICTOR_WEIGHTS.get(weight).copied().unwrap_or(0);
+            p1 + ((a * (p1 - p2)) >> 2)
+        }
+    }
+}
+
+/// The value residual `q` gives: `pred + q · step` wrapped into `i32`
+/// (two's complement), SPEC.md §5b. Most residuals are 0, which needs no
+/// 64-bit multiply.
+#[inline(always)]
+pub fn value(pred: i64, q: i64, step: i64) -> i32 {
+    if q == 0 {
+        pred as i32
+    } else {
+        pred.wrapping_add(q.wrapping_mul(step)) as i32
     }
 }
 

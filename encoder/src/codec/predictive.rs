@@ -9,7 +9,9 @@ use mocap_decoder::consts::predictive::{
     MOVE_BITS, PREDICTOR_WEIGHTS, PROBS_PER_CONTEXT, PROB_BITS, PROB_INIT, TOP,
 };
 
-use crate::container::{varint, zigzag};
+use mocap_decoder::predictive::{predict, value};
+
+use crate::container::{varint, zigzag, ByteCursor};
 
 /// Frames per block when the caller does not choose: about this many
 /// seconds (random access decodes at most one block).
@@ -193,19 +195,8 @@ pub struct SectionInfo {
 
 /// Reads the structure of a predictive section (`None` if malformed).
 pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
-    let mut at = 0;
-    let mut next = || -> Option<u32> {
-        let mut v: u32 = 0;
-        for shift in (0..35).step_by(7) {
-            let b = *section.get(at)?;
-            at += 1;
-            v |= u32::from(b & 0x7F).checked_shl(shift)?;
-            if b & 0x80 == 0 {
-                return Some(v);
-            }
-        }
-        None
-    };
+    let mut r = ByteCursor::new(section);
+    let mut next = || r.varint();
     let channels = next()? as usize;
     let block_frames = next()?;
     let _unit = next()?;
@@ -240,31 +231,18 @@ fn min_max(v: &[i32]) -> (i32, i32) {
         .fold((i32::MAX, i32::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)))
 }
 
-/// Step multipliers to try for tolerance `t`: eighths of `2t + 1`, in `unit`s.
+/// Step multipliers to try for tolerance `t`: eighths of `2t + 1`, in
+/// `unit`s, at least 1 and small enough for the mode varint. Every step is
+/// at most `2t + 1` (`unit` is at most an eighth of it, or 1).
 fn multipliers(t: i64, unit: i64) -> Vec<u32> {
     let s0 = 2 * t + 1;
+    let cap = i64::from(u32::MAX >> MODE_STEP_SHIFT);
     let mut m: Vec<u32> = STEP_EIGHTHS
         .iter()
-        .map(|&e| ((s0 * e / 8) / unit).max(1) as u32)
-        .filter(|&m| i64::from(m) * unit <= s0)
+        .map(|&e| ((s0 * e / 8) / unit).clamp(1, cap) as u32)
         .collect();
     m.dedup();
     m
-}
-
-/// The decoder's prediction (SPEC.md §5b) at frame `j` of a block.
-fn predict(j: usize, v1: i32, v2: i32, weight: usize) -> i64 {
-    let (p1, p2) = (i64::from(v1), i64::from(v2));
-    match j {
-        0 => 0,
-        1 => p1,
-        _ => p1 + ((PREDICTOR_WEIGHTS[weight] * (p1 - p2)) >> 2),
-    }
-}
-
-/// The decoder's value for residual `q` (wrapping into `i32`).
-fn value(pred: i64, q: i64, step: i64) -> i32 {
-    pred.wrapping_add(q.wrapping_mul(step)) as i32
 }
 
 /// Residuals `k` at which the value stays within `tol` of `x`.
@@ -284,7 +262,7 @@ fn quantise_greedy(x: &[i32], tol: i64, step: i64, weight: usize, block: usize) 
     let (mut v1, mut v2) = (0i32, 0i32);
     let mut q = Vec::with_capacity(x.len());
     for (f, &xf) in x.iter().enumerate() {
-        let pred = predict(f % block, v1, v2, weight);
+        let pred = predict((f % block) as u32, v1, v2, weight);
         let k = candidates(xf, pred, step, tol)
             .min_by_key(|k| k.unsigned_abs())
             .unwrap_or_else(|| (i64::from(xf) - pred).div_euclid(step));
@@ -301,7 +279,7 @@ fn reconstruct(q: &[i64], step: i64, weight: usize, block: usize) -> Vec<i32> {
     q.iter()
         .enumerate()
         .map(|(f, &k)| {
-            let v = value(predict(f % block, v1, v2, weight), k, step);
+            let v = value(predict((f % block) as u32, v1, v2, weight), k, step);
             v2 = v1;
             v1 = v;
             v
@@ -447,7 +425,7 @@ fn beam_search(
         let mut next: Vec<Node> = Vec::new();
         for (i, n) in prev.iter().enumerate() {
             let ctx = if j == 0 { 0 } else { n.ctx };
-            let pred = predict(j, n.v1, n.v2, weight);
+            let pred = predict(j as u32, n.v1, n.v2, weight);
             for k in candidates(xf, pred, step, tol) {
                 let node = Node {
                     v1: value(pred, k, step),

@@ -5,7 +5,7 @@ use mocap_decoder::consts::pca::MAX_TIME_BITS;
 
 use super::{GroupModel, Model};
 use crate::codec::bits::BitWriter;
-use crate::container::{varint, zigzag};
+use crate::container::{varint, zigzag, ByteCursor};
 
 fn index(out: &mut Vec<u8>, c: usize, wide: bool) {
     out.push(c as u8);
@@ -116,7 +116,7 @@ pub struct SectionInfo {
 /// Reads the figures back from a section (already validated by the
 /// decoder); `None` if it does not parse.
 pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
-    let mut r = Cursor { b: section, at: 0 };
+    let mut r = ByteCursor::new(section);
     let wide = r.u8()? == 2;
     let w = if wide { 2 } else { 1 };
     let groups = r.varint()? as usize;
@@ -141,17 +141,17 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
         let start = r.varint()?;
         let end = r.varint()?;
         let len = r.varint()? as usize;
-        let stop = r.at + len;
+        let stop = r.pos() + len;
         let mut per = Vec::new();
         for &n in &sizes {
             let k = r.u8()? as usize;
             r.u8()?;
             if k == 0 {
-                let from = r.at;
+                let from = r.pos();
                 for _ in 0..n {
                     r.varint()?;
                 }
-                info.mean_bytes += r.at - from + 2;
+                info.mean_bytes += r.pos() - from + 2;
                 per.push((0, 0));
                 continue;
             }
@@ -159,7 +159,7 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
             info.mean_bytes += 2 * n + 2;
             r.skip(n * k)?;
             info.basis_bytes += n * k;
-            let from = r.at;
+            let from = r.pos();
             let m = r.varint()? as usize;
             let tb = r.u8()? as u64;
             let mut row = 0u64;
@@ -169,10 +169,10 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
                 r.varint()?;
             }
             r.skip((m as u64 * (tb + row)).div_ceil(8) as usize)?;
-            info.key_bytes += r.at - from;
+            info.key_bytes += r.pos() - from;
             per.push((k, m));
         }
-        if r.at != stop {
+        if r.pos() != stop {
             return None;
         }
         let patches = r.varint()? as usize;
@@ -181,33 +181,4 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
         info.segments.push((start, end, per));
     }
     Some(info)
-}
-
-struct Cursor<'a> {
-    b: &'a [u8],
-    at: usize,
-}
-
-impl Cursor<'_> {
-    fn u8(&mut self) -> Option<u8> {
-        let v = *self.b.get(self.at)?;
-        self.at += 1;
-        Some(v)
-    }
-
-    fn skip(&mut self, n: usize) -> Option<()> {
-        (self.at + n <= self.b.len()).then(|| self.at += n)
-    }
-
-    fn varint(&mut self) -> Option<u32> {
-        let mut v = 0u32;
-        for i in 0..5 {
-            let b = self.u8()?;
-            v |= u32::from(b & 0x7F) << (7 * i);
-            if b & 0x80 == 0 {
-                return Some(v);
-            }
-        }
-        None
-    }
 }
