@@ -1,7 +1,5 @@
-//! Motion Track (src/track/): SOM, LLE, IDW, the SVG's structure, and a
-//! corpus check (original vs decoded) that skips without the CMU data.
-
-use std::path::PathBuf;
+//! Motion Track (src/track/): SOM, LLE, IDW, the SVG's structure (the
+//! corpus check is tests/tests/corpus_track.rs).
 
 use mocap_encoder::motion::{ChannelKind::*, Joint, Motion, Skeleton};
 use mocap_encoder::track::features::{self, quat_frames, rotating_joints};
@@ -373,72 +371,4 @@ fn svg_has_one_path_per_clip_and_one_marker_per_key_frame() {
         .count();
     // One per key frame, and the legend's sample.
     assert_eq!(markers, space.key_count() + 1);
-}
-
-fn corpus() -> Option<PathBuf> {
-    let p = std::env::var_os("MOCAP_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data"));
-    p.join("cmu/35_01.bvh").is_file().then_some(p)
-}
-
-#[test]
-fn corpus_decoded_clip_tracks_its_source() {
-    let Some(root) = corpus() else {
-        eprintln!("SKIPPED: no CMU corpus (set MOCAP_CORPUS)");
-        return;
-    };
-    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
-    let walk = mocap_encoder::bvh::read_file(&root.join("cmu/35_01.bvh")).unwrap();
-    let run = mocap_encoder::bvh::read_file(&root.join("cmu/35_17.bvh")).unwrap();
-    let unit = mocap_encoder::units::detect(&walk);
-    let enc = encode::encode(
-        &walk,
-        &EncodeOptions {
-            codec: CodecChoice::Index,
-            bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
-            metres_per_unit: unit.metres(),
-            key_interval: None,
-        },
-    )
-    .unwrap();
-    let clip = mocap_decoder::Clip::parse(&enc.bytes).unwrap();
-    let decoded = mocap_encoder::clipfile::to_motion(&clip).unwrap();
-    let joints = rotating_joints(&walk);
-    let qs: Vec<_> = [&walk, &run, &decoded]
-        .iter()
-        .map(|m| quat_frames(m, &joints).unwrap())
-        .collect();
-    let mut opts = small_options();
-    opts.som.width = 8;
-    opts.som.height = 8;
-    opts.k = 12;
-    let space = build_reference(&qs[..2].iter().collect::<Vec<_>>(), &opts).unwrap();
-    let xy: Vec<_> = qs
-        .iter()
-        .map(|q| space.place(q, opts.scheme, opts.p, opts.neighbours))
-        .collect();
-    let tracks: Vec<Track> = xy
-        .into_iter()
-        .zip(["walk", "run", "walk decoded"])
-        .zip(&qs)
-        .map(|((xy, name), q)| Track {
-            name: name.into(),
-            xy,
-            speed: q.speed.clone(),
-        })
-        .collect();
-    // The decoded walk follows its source frame by frame, much closer than
-    // the walk is to the run.
-    let frame_gap: f64 = tracks[0]
-        .xy
-        .iter()
-        .zip(&tracks[2].xy)
-        .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt())
-        .sum::<f64>()
-        / tracks[0].xy.len() as f64;
-    let stats = mocap_encoder::track::pair_stats(&tracks);
-    let walk_run = stats.iter().find(|p| p.a == 0 && p.b == 1).unwrap().between;
-    eprintln!("walk vs decoded walk: {frame_gap:.4} per frame; walk vs run: {walk_run:.4}");
-    assert!(frame_gap < 0.25 * walk_run, "{frame_gap} vs {walk_run}");
 }
