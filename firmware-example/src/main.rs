@@ -203,8 +203,8 @@ enum Failure {
 /// Number of samples in sample mode: t = 0, P, 2P, … up to and including the first t past
 /// `duration_us`, that is ⌊duration / P⌋ + 2.
 fn sample_count(duration_us: u64) -> u64 {
-    // `max(1)`: this also compiles (unused) in frame mode, where SAMPLE_US is 0.
-    duration_us / SAMPLE_US.max(1) + 2
+    // `checked_div`: this also compiles (unused) in frame mode, where SAMPLE_US is 0.
+    duration_us.checked_div(SAMPLE_US).unwrap_or(0) + 2
 }
 
 /// The output lines of one run: every frame in order (`next_frame`), or in sample mode
@@ -350,11 +350,13 @@ fn run(text: &mut Out) -> Result<(), Failure> {
         text.str("# mode=frames").nl();
     }
 
-    let t0 = ticks::now();
-    let player = decoder_glue::new_player::<MAX_CHANNELS>(&clip)
-        .map_err(|e| Failure::Decoder("player", e))?;
-    let new_ticks = ticks::since(t0, ticks::now());
-    drop(player);
+    // Player::new alone, timed; the player is not kept.
+    let new_ticks = {
+        let t0 = ticks::now();
+        let _player = decoder_glue::new_player::<MAX_CHANNELS>(&clip)
+            .map_err(|e| Failure::Decoder("player", e))?;
+        ticks::since(t0, ticks::now())
+    };
 
     let timing = timed_pass(&clip)?;
     let printed = print_pass(&clip, text)?;
