@@ -6,15 +6,20 @@
 #  2. decode cost in QEMU with -icount shift=0 on Cortex-M0/M3/M4F for one CMU clip;
 #  3. firmware and decoder sizes, decoder state size.
 #   bash scripts/bench.sh [CLIP.bvh]   (default: $MOCAP_CORPUS/cmu/35_01.bvh)
+#   Failing steps print why (their output is in target/bench/steps.log).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+# shellcheck source=scripts/toolchain.sh
+source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
+cd "$MOCAP_REPO_ROOT"
 corpus="${MOCAP_CORPUS:-../shared/data}"
-source scripts/toolchain.sh
 mocap_toolchain_setup >&2
 cargo build --release -q -p mocap-encoder
 mocap=target/release/mocap
 out=target/bench
 mkdir -p "$out"
+log="$out/steps.log"
+: >"$log"
+mocap_explain_failure bench.sh "$log"
 
 echo "## Rate–distortion (mocap bench)"
 echo
@@ -32,8 +37,8 @@ echo "|---|---|---|"
 for n in 150 300 600 1200; do
     awk -v n="$n" '/^Frames:/ {print "Frames: " n; next} /^Frame Time/ {print; body=1; next} body {if (k++ < n) print; next} {print}' \
         "$corpus/cmu/05_04.bvh" >"$out/cut.bvh"
-    /usr/bin/time -f %e -o "$out/time" "$mocap" encode "$out/cut.bvh" -o "$out/cut.mcb" \
-        --codec pca-spline --max-error 50mm+arms:10mm >/dev/null 2>&1
+    mocap_logged "$log" /usr/bin/time -f %e -o "$out/time" "$mocap" encode "$out/cut.bvh" -o "$out/cut.mcb" \
+        --codec pca-spline --max-error 50mm+arms:10mm
     echo "| $n | $(cat "$out/time") | $(stat -c %s "$out/cut.mcb") |"
 done
 echo
@@ -45,7 +50,7 @@ for f in 35_01 05_04; do
     for b in 0.5deg 2deg; do
         for c in index pca-spline predictive; do
             "$mocap" encode "$corpus/cmu/$f.bvh" --rig assets/rigs/cmu_upper_body.toml -o "$out/servo.mcb" \
-                --codec "$c" --max-error "$b" 2>/dev/null | sed "s|^$out/servo.mcb: |$f @ $b: |"
+                --codec "$c" --max-error "$b" 2>>"$log" | sed "s|^$out/servo.mcb: |$f @ $b: |"
         done
     done
 done
@@ -53,15 +58,16 @@ echo '```'
 echo
 
 clip_src="${1:-$corpus/cmu/35_01.bvh}"
-"$mocap" encode "$clip_src" -o "$out/clip.mcb" --max-error 1deg >/dev/null 2>&1
+mocap_logged "$log" "$mocap" encode "$clip_src" -o "$out/clip.mcb" --max-error 1deg
 channels=$("$mocap" info "$out/clip.mcb" | sed -n 's/.* × \([0-9]*\) channels.*/\1/p')
 echo "## Decode cost in QEMU (-icount shift=0), $(basename "$clip_src") at 1°, $channels channels"
 echo
 echo "| core | board | instructions/frame | instructions/channel/frame | Clip::parse (CRC incl.) | Player::new | stack used B | Player<320> state B |"
 echo "|---|---|---|---|---|---|---|---|"
-for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
-    board=${b%%:*}; core=${b##*:}
-    bash scripts/firmware.sh run --board "$board" --clip "$out/clip.mcb" --icount 2>/dev/null >"$out/uart-$board.txt"
+for board in $(mocap_boards); do
+    core=$(mocap_board_core "$board")
+    bash scripts/firmware.sh run --board "$board" --clip "$out/clip.mcb" --icount 2>>"$log" >"$out/uart-$board.txt" \
+        || { echo "bench.sh: firmware run on $board failed; last lines of $log:" >&2; tail -n 25 "$log" >&2; exit 1; }
     get() { sed -n "s/.*$1=\([0-9]*\).*/\1/p" "$out/uart-$board.txt" | head -1; }
     pc=$(sed -n 's/^# decode_instructions_total=.* per_channel_x100=\([0-9]*\).*/\1/p' "$out/uart-$board.txt")
     echo "| $core | $board | $(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\).*/\1/p' "$out/uart-$board.txt") | $((pc / 100)).$(printf %02d $((pc % 100))) | $(get parse_instructions) | $(get player_new_instructions) | $(get stack_bytes_used) | $(get state_bytes) |"
@@ -72,13 +78,14 @@ pose_cost_table() {
     local clip=$1 tag=$2
     echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | stack used B |"
     echo "|---|---|---|---|---|---|---|"
-    for b in microbit:M0 lm3s6965:M3 mps2-an386:M4F; do
-        board=${b%%:*}; core=${b##*:}
+    for board in $(mocap_boards); do
+        core=$(mocap_board_core "$board")
         for mode in frames:0 "sample_at 50 Hz":20000; do
             name=${mode%%:*}; us=${mode##*:}
             extra=(); [ "$us" != 0 ] && extra=(--sample-us "$us")
             bash scripts/firmware.sh run --board "$board" --clip "$clip" --icount "${extra[@]}" \
-                2>/dev/null >"$out/uart-$tag-$board-$us.txt"
+                2>>"$log" >"$out/uart-$tag-$board-$us.txt" \
+                || { echo "bench.sh: firmware run on $board ($name) failed; last lines of $log:" >&2; tail -n 25 "$log" >&2; exit 1; }
             line=$(grep '^# decode_instructions_total=' "$out/uart-$tag-$board-$us.txt")
             per=$(sed -n 's/.* per_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
             pc=$(sed -n 's/.* per_channel_x100=\([0-9]*\).*/\1/p' <<<"$line")
@@ -90,19 +97,19 @@ pose_cost_table() {
     echo
 }
 pca_src="$corpus/cmu/35_01.bvh"
-"$mocap" encode "$pca_src" -o "$out/pca.mcb" --codec pca-spline --max-error 50mm+arms:10mm >/dev/null 2>&1
+mocap_logged "$log" "$mocap" encode "$pca_src" -o "$out/pca.mcb" --codec pca-spline --max-error 50mm+arms:10mm
 echo "## pca-spline decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 50 mm + ARMS 10 mm, $(stat -c %s "$out/pca.mcb") bytes"
 echo
 pose_cost_table "$out/pca.mcb" pca
-"$mocap" encode "$pca_src" -o "$out/pred.mcb" --codec predictive --max-error 1deg >/dev/null 2>&1
+mocap_logged "$log" "$mocap" encode "$pca_src" -o "$out/pred.mcb" --codec predictive --max-error 1deg
 echo "## predictive decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 1°, $(stat -c %s "$out/pred.mcb") bytes"
 echo
 pose_cost_table "$out/pred.mcb" pred
 echo "## Flash (opt-level = \"s\", LTO), same clip"
 echo
 echo '```text'
-for board in microbit lm3s6965 mps2-an386; do
-    bash scripts/firmware.sh size --board "$board" --clip "$out/clip.mcb" 2>/dev/null | tr '\n' ' '
+for board in $(mocap_boards); do
+    bash scripts/firmware.sh size --board "$board" --clip "$out/clip.mcb" 2>>"$log" | tr '\n' ' '
     echo
 done
 echo '```'

@@ -4,9 +4,10 @@
 # is inside, measure it, then play it on an emulated Cortex-M3 in QEMU and
 # check the firmware's output against the host decoder.
 set -euo pipefail
-cd "$(dirname "$0")/.."
 # shellcheck source=scripts/toolchain.sh
-source scripts/toolchain.sh
+source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
+cd "$MOCAP_REPO_ROOT"
+mocap_explain_failure demo.sh
 mocap_toolchain_setup >&2
 
 cargo build --release -q -p mocap-encoder
@@ -31,8 +32,8 @@ fi
 # The same clip as an animatronic show: the demo rig's 12 servos coded in servo space, played by
 # the host into Pololu Maestro commands and by the firmware's servo loop on the Cortex-M3; the
 # two byte streams must agree.
-"$mocap" encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
-    --max-error 0.5deg -o "$out/demo_servo.mcb" 2>/dev/null
+mocap_logged "$out/encode_servo.log" "$mocap" encode assets/animatronic_demo.bvh \
+    --rig assets/rigs/animatronic_demo.toml --max-error 0.5deg -o "$out/demo_servo.mcb"
 "$mocap" play "$out/demo_servo.mcb" --protocol maestro --output "$out/host.maestro" --fast
 echo "playing the servo clip on Cortex-M3 (QEMU, Maestro output)…" >&2
 bash scripts/firmware.sh run --board lm3s6965 --clip "$out/demo_servo.mcb" --servo maestro --icount \

@@ -28,21 +28,22 @@
 #       into the decoder, where LTO inlines it), core_fmt_code_bytes (error messages only),
 #       firmware_own_code_bytes. Stack use is printed by `run` (# stack_bytes_used=).
 #   scripts/firmware.sh boards
-#       Lists the boards: name, Rust target, QEMU machine.
+#       Lists the boards (the table in scripts/boards.sh): name, core, Rust target, QEMU machine,
+#       memory map.
 #
 # Exit codes: 0 success; 1 the firmware reported a failure (run); 2 usage error or missing clip;
 # 3 toolchain or build failure; 124 QEMU timed out.
 #
-# Boards: lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F).
+# Boards (scripts/boards.sh): lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F).
 # Clip: default firmware-example/clips/demo.mcb.
 # Toolchain: scripts/toolchain.sh (rustup target if installed, else Debian's -Zbuild-std route);
 # it installs missing packages itself (apt-get, root or sudo). Build/toolchain chatter goes to
 # stderr; stdout holds only the results described above.
 set -euo pipefail
 
-SCRIPT_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+# No `cd`: --clip and --input paths are the caller's.
 # shellcheck source=scripts/toolchain.sh
-source "$SCRIPT_DIR/toolchain.sh"
+source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
 FW="$MOCAP_FIRMWARE_DIR"
 
 die() {
@@ -59,29 +60,15 @@ usage() {
     sed -n '2,/^$/p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
 }
 
-# board -> target, QEMU machine arguments
 board_target() {
-    case "$1" in
-        lm3s6965) echo thumbv7m-none-eabi ;;
-        microbit) echo thumbv6m-none-eabi ;;
-        mps2-an386) echo thumbv7em-none-eabihf ;;
-        *) die "unknown board '$1' (expected lm3s6965, microbit or mps2-an386)" ;;
-    esac
-}
-
-board_qemu_args() {
-    case "$1" in
-        lm3s6965) echo "-machine lm3s6965evb -cpu cortex-m3" ;;
-        microbit) echo "-machine microbit" ;;
-        mps2-an386) echo "-machine mps2-an386" ;;
-    esac
+    mocap_board_target "$1" 2>/dev/null || die "unknown board '$1' (expected: $(mocap_boards | paste -sd' '))"
 }
 
 # ---- arguments
 [ "$#" -ge 1 ] || { usage >&2; exit 2; }
 CMD="$1"
 shift
-BOARD=lm3s6965
+BOARD="$MOCAP_DEFAULT_BOARD"
 CLIP="$FW/clips/demo.mcb"
 ICOUNT=0
 TIMEOUT=300
@@ -112,8 +99,9 @@ done
 case "$CMD" in
     build|run|size) ;;
     boards)
-        for b in lm3s6965 microbit mps2-an386; do
-            printf '%-11s %-22s %s\n' "$b" "$(board_target "$b")" "$(board_qemu_args "$b")"
+        for b in $(mocap_boards); do
+            printf '%-11s %-4s %-22s %-36s %s\n' "$b" "$(mocap_board_core "$b")" "$(mocap_board_target "$b")" \
+                "$(mocap_board_qemu_args "$b")" "$(mocap_board_memory "$b")"
         done
         exit 0 ;;
     -h|--help|help) usage; exit 0 ;;
@@ -180,7 +168,7 @@ build() {
 
 run_qemu() {
     local elf="$1" rc=0 qemu_args
-    read -r -a qemu_args <<<"$(board_qemu_args "$BOARD")"
+    read -r -a qemu_args <<<"$(mocap_board_qemu_args "$BOARD")"
     [ "$ICOUNT" -eq 1 ] && qemu_args+=(-icount shift=0)
     # No monitor, no display; UART0 (serial0) on stdout, its receiver fed from --input (stdin
     # of QEMU; /dev/null by default, never the caller's terminal).

@@ -6,6 +6,10 @@
 #   mocap_cargo TARGET ARGS...             # run cargo for TARGET the way this machine can:
 #                                          #   mocap_cargo thumbv7m-none-eabi build --release
 #   mocap_toolchain_summary                # print what was chosen
+#   mocap_logged LOG CMD...                # run CMD with its output in LOG; on failure say so
+#                                          #   and print LOG's last lines
+#   mocap_explain_failure NAME [LOG]       # a failing command of the script prints what and why
+#   the board table (scripts/boards.sh): mocap_boards, mocap_board_target B, ...
 #
 #   bash scripts/toolchain.sh [TARGET...]  # set up and print the summary
 #
@@ -16,7 +20,8 @@
 #   debian  - otherwise: Debian's matching rustc-web + cargo-web + rust-web-src, building `core`
 #             from source: RUSTC_BOOTSTRAP=1 RUSTC=/usr/bin/rustc /usr/bin/cargo -Zbuild-std=core,
 #             linked with ld.lld (Debian's lld).
-# Always needed: qemu-system-arm (package qemu-system-arm). ld.lld (package lld) for the debian route.
+# Always needed: qemu-system-arm (package qemu-system-arm). ld.lld (package lld) for the debian route,
+# and for `mocap_cargo TARGET clippy` Debian's clippy of the same rustc (package rust-web-clippy).
 #
 # Packages are installed with apt-get (as root, or through sudo), `apt-get update` only when
 # something is missing, never interactively. Everything verbose goes to $MOCAP_TOOLCHAIN_LOG.
@@ -25,11 +30,14 @@
 #   MOCAP_TOOLCHAIN_LOG     log file (default: firmware-example/target/toolchain.log)
 #   MOCAP_TOOLCHAIN_ROUTE   force a route for every target: rustup | debian
 #
-# This file is meant to be sourced: it sets no shell options and never calls `exit`
-# (functions `return` non-zero and print the reason on stderr).
+# This file is the one set-up preamble of every script, sourced the same way by each:
+#   source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
+# It sets no shell options and never calls `exit` (functions `return` non-zero and print the
+# reason on stderr).
 
-MOCAP_FW_TARGETS="thumbv6m-none-eabi thumbv7m-none-eabi thumbv7em-none-eabihf"
 MOCAP_REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=scripts/boards.sh
+source "$MOCAP_REPO_ROOT/scripts/boards.sh"
 MOCAP_FIRMWARE_DIR="$MOCAP_REPO_ROOT/firmware-example"
 : "${MOCAP_TOOLCHAIN_LOG:=$MOCAP_FIRMWARE_DIR/target/toolchain.log}"
 MOCAP_DEBIAN_RUSTC=/usr/bin/rustc
@@ -50,6 +58,37 @@ _mocap_err() {
 _mocap_route_var() {
     local t="${1^^}"
     printf 'MOCAP_ROUTE_%s' "${t//[-.]/_}"
+}
+
+# mocap_logged LOG CMD...: runs CMD with stdout and stderr appended to LOG. On failure prints
+# what failed, its exit code and the last lines of LOG on stderr, and returns CMD's exit code.
+mocap_logged() {
+    local log="$1" rc=0
+    shift
+    mkdir -p "$(dirname "$log")"
+    printf '$ %s\n' "$*" >>"$log"
+    "$@" >>"$log" 2>&1 || rc=$?
+    if [ "$rc" -ne 0 ]; then
+        printf 'error: `%s` failed (exit %s); last lines of %s:\n' "$*" "$rc" "$log" >&2
+        tail -n "${MOCAP_LOG_TAIL:-25}" "$log" | sed 's/^/    /' >&2
+    fi
+    return "$rc"
+}
+
+# mocap_explain_failure NAME [LOG]: under `set -e`, a failing command of the calling script
+# prints NAME, the line and the command, and LOG's last lines, before the script exits.
+mocap_explain_failure() {
+    _MOCAP_SCRIPT_NAME="$1"
+    _MOCAP_SCRIPT_LOG="${2:-}"
+    trap '_mocap_on_err $? $LINENO "$BASH_COMMAND"' ERR
+}
+
+_mocap_on_err() {
+    printf '%s: error: line %s: `%s` failed (exit %s)\n' "$_MOCAP_SCRIPT_NAME" "$2" "$3" "$1" >&2
+    if [ -n "$_MOCAP_SCRIPT_LOG" ] && [ -s "$_MOCAP_SCRIPT_LOG" ]; then
+        printf '%s: last lines of %s:\n' "$_MOCAP_SCRIPT_NAME" "$_MOCAP_SCRIPT_LOG" >&2
+        tail -n "${MOCAP_LOG_TAIL:-25}" "$_MOCAP_SCRIPT_LOG" | sed 's/^/    /' >&2
+    fi
 }
 
 _mocap_pkg_installed() {
@@ -187,9 +226,14 @@ mocap_cargo() {
     if [ "$route" = rustup ]; then
         cargo "$@" --target "$target"
     else
-        local upper="${target^^}"
+        local upper="${target^^}" path="$PATH"
         upper="${upper//[-.]/_}"
-        env RUSTC_BOOTSTRAP=1 RUSTC="$MOCAP_DEBIAN_RUSTC" \
+        if [ "$1" = clippy ]; then
+            # Debian's cargo-clippy/clippy-driver match its rustc; rustup's (first on PATH) do not.
+            mocap_ensure_packages rust-web-clippy || return 1
+            path="$(dirname "$MOCAP_DEBIAN_CARGO"):$PATH"
+        fi
+        env PATH="$path" RUSTC_BOOTSTRAP=1 RUSTC="$MOCAP_DEBIAN_RUSTC" \
             "CARGO_TARGET_${upper}_LINKER=ld.lld" \
             "$MOCAP_DEBIAN_CARGO" "$@" -Zbuild-std=core --target "$target"
     fi

@@ -1,7 +1,7 @@
 //! Servo rigs (src/rig.rs): the example rig, error positions, the mapping
 //! from channels to pulses on synthetic motions (clamping, inversion,
-//! reversed servos, speed and acceleration limits, garbage input), and the
-//! example rig on the CMU corpus (skipped visibly without it).
+//! reversed servos, speed and acceleration limits, garbage input); the
+//! example rig on the CMU corpus is tests/tests/corpus_rig.rs.
 
 use std::path::PathBuf;
 

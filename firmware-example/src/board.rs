@@ -129,7 +129,7 @@ mod imp {
     }
 
     const UART0: usize = 0x4000_2000;
-    const TASKS_STARTRX: usize = UART0 + 0x000;
+    const TASKS_STARTRX: usize = UART0; // offset 0x000
     const TASKS_STARTTX: usize = UART0 + 0x008;
     const EVENTS_RXDRDY: usize = UART0 + 0x108;
     const EVENTS_TXDRDY: usize = UART0 + 0x11C;

@@ -14,39 +14,40 @@ impl<W: Write> Text<W> {
     }
 
     pub fn u64(&mut self, mut n: u64) -> &mut Self {
-        let mut digits = [0u8; 20]; // u64::MAX has 20 digits
-        let mut len = 0;
-        loop {
-            digits[len] = b'0' + (n % 10) as u8;
-            len += 1;
+        // u64::MAX has 20 digits. Filled from the end by iterating the array itself, so no
+        // store can be out of bounds (an index left a `panic_bounds_check` in the ELF).
+        let mut digits = [0u8; 20];
+        let mut start = digits.len();
+        for slot in digits.iter_mut().rev() {
+            *slot = b'0' + (n % 10) as u8;
+            start -= 1;
             n /= 10;
             if n == 0 {
                 break;
             }
         }
-        while len > 0 {
-            len -= 1;
-            self.0.write_byte(digits[len]);
-        }
-        self
+        self.bytes(digits.iter().skip(start))
     }
 
     pub fn u32(&mut self, n: u32) -> &mut Self {
         // A 32-bit loop: u64 division is a library call on Cortex-M.
         let mut n = n;
-        let mut digits = [0u8; 10];
-        let mut len = 0;
-        loop {
-            digits[len] = b'0' + (n % 10) as u8;
-            len += 1;
+        let mut digits = [0u8; 10]; // u32::MAX has 10 digits
+        let mut start = digits.len();
+        for slot in digits.iter_mut().rev() {
+            *slot = b'0' + (n % 10) as u8;
+            start -= 1;
             n /= 10;
             if n == 0 {
                 break;
             }
         }
-        while len > 0 {
-            len -= 1;
-            self.0.write_byte(digits[len]);
+        self.bytes(digits.iter().skip(start))
+    }
+
+    fn bytes<'a>(&mut self, bytes: impl Iterator<Item = &'a u8>) -> &mut Self {
+        for &b in bytes {
+            self.0.write_byte(b);
         }
         self
     }

@@ -53,11 +53,16 @@ pub fn corpus_file(folder: &str, name: &str) -> Option<PathBuf> {
     files.into_iter().find(|p| p.ends_with(name)).or(first)
 }
 
-/// Prints `SKIPPED: <why>` on the real stderr, past the test harness's
-/// output capture, so a skip is always visible.
+/// Prints `SKIPPED: <test>: <why>` on the real stderr, past the test
+/// harness's output capture, so a skip is always visible; `<test>` is the
+/// name of the test's thread, which the harness names after the test.
+/// scripts/test.sh counts every test that printed this line as skipped, not
+/// passed (once, however often it prints it).
 pub fn skipped(why: &str) {
     use std::io::Write;
-    let _ = writeln!(std::io::stderr().lock(), "SKIPPED: {why}");
+    let thread = std::thread::current();
+    let test = thread.name().unwrap_or("unnamed-thread");
+    let _ = writeln!(std::io::stderr().lock(), "SKIPPED: {test}: {why}");
 }
 
 /// The workspace root.

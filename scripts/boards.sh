@@ -1,0 +1,49 @@
+# The firmware's boards: the one table that every script reads (through scripts/toolchain.sh,
+# which sources this file). Sourced only: sets no shell options, never exits.
+#
+#   board       core  Rust target             QEMU machine arguments            memory map (from firmware-example/)
+MOCAP_BOARD_TABLE='
+microbit    M0    thumbv6m-none-eabi      -machine microbit                 memory/microbit.x
+lm3s6965    M3    thumbv7m-none-eabi      -machine lm3s6965evb -cpu cortex-m3 ../memory.x
+mps2-an386  M4F   thumbv7em-none-eabihf   -machine mps2-an386               memory/mps2-an386.x
+'
+# Order: smallest core first (the order of the benchmark tables). The default board:
+MOCAP_DEFAULT_BOARD=lm3s6965
+
+# mocap_boards: the board names, one per line.
+mocap_boards() {
+    awk 'NF { print $1 }' <<<"$MOCAP_BOARD_TABLE"
+}
+
+# _mocap_board_row BOARD: the table row of BOARD (fails with a message for an unknown board).
+_mocap_board_row() {
+    local row
+    row="$(awk -v b="$1" '$1 == b' <<<"$MOCAP_BOARD_TABLE")"
+    if [ -z "$row" ]; then
+        printf 'boards: unknown board %s (expected one of: %s)\n' "$1" "$(mocap_boards | tr '\n' ' ')" >&2
+        return 2
+    fi
+    printf '%s\n' "$row"
+}
+
+# _mocap_board_field BOARD AWK-PROGRAM: one field of BOARD's row.
+_mocap_board_field() {
+    local row
+    row="$(_mocap_board_row "$1")" || return
+    awk "$2" <<<"$row"
+}
+
+# mocap_board_core BOARD: M0, M3, M4F.
+mocap_board_core() { _mocap_board_field "$1" '{ print $2 }'; }
+# mocap_board_target BOARD: the Rust target.
+mocap_board_target() { _mocap_board_field "$1" '{ print $3 }'; }
+# mocap_board_qemu_args BOARD: qemu-system-arm's machine arguments.
+mocap_board_qemu_args() {
+    _mocap_board_field "$1" '{ s = ""; for (i = 4; i < NF; i++) s = s (s == "" ? "" : " ") $i; print s }'
+}
+# mocap_board_memory BOARD: the memory map, relative to firmware-example/ (build.rs picks it by
+# the board's cargo feature; scripts/check.sh checks that the two agree).
+mocap_board_memory() { _mocap_board_field "$1" '{ print $NF }'; }
+
+# The Rust targets of all boards, space-separated.
+MOCAP_FW_TARGETS="$(awk 'NF { printf "%s%s", sep, $3; sep = " " }' <<<"$MOCAP_BOARD_TABLE")"
