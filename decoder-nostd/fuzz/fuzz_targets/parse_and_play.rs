@@ -14,7 +14,11 @@ fn play(bytes: &[u8]) {
     let _ = clip.header().channels().count();
     if let Some(rig) = clip.rig() {
         for s in rig.servos() {
-            let _ = (s.pulse_qus(i32::MIN), s.pulse_qus(i32::MAX), s.max_step_qus(rig.rate_mhz()));
+            let _ = (
+                s.pulse_qus(i32::MIN),
+                s.pulse_qus(i32::MAX),
+                s.max_step_qus(rig.rate_mhz()),
+            );
         }
     }
     let Ok(mut player) = Player::<512>::new(&clip) else {

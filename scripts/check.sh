@@ -1,0 +1,222 @@
+#!/usr/bin/env bash
+# The static checks that CI runs before the tests (scripts/test.sh runs this first):
+#   fmt           cargo fmt --check: the workspace, firmware-example/, decoder-nostd/fuzz/
+#   clippy        cargo clippy --workspace --all-targets -- -D warnings
+#   boards        the board table (scripts/boards.sh) names the memory maps build.rs uses
+#   fw-clippy-B   cargo clippy -- -D warnings of the firmware for board B, in each build mode
+#                 (frames, sample, servo, stream), through scripts/toolchain.sh's route
+#   nostd-...     mocap-decoder on thumbv6m-none-eabi with no default features, then each codec
+#                 feature alone, and defmt; mocap-servo with no default features and pca9685
+#   panic-B       the firmware ELF of board B (scripts/firmware.sh build) has no panic machinery
+#                 (core::panicking::*, panic_fmt, panic_bounds_check, *_fail) except the call
+#                 sites listed, each with why it cannot fire, in scripts/panic-allowlist.txt
+#
+#   bash scripts/check.sh [STEP-PREFIX...]     # all steps, or those whose name starts so
+#
+# Each step prints its name, ok/FAILED and its time; a failed step prints why (the last lines
+# of its log, target/check/<step>.log) and the run goes on, so one run reports every failure.
+# The last line is `checks: N passed, N failed`; the exit code is 1 if any step failed.
+set -euo pipefail
+# shellcheck source=scripts/toolchain.sh
+source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
+cd "$MOCAP_REPO_ROOT"
+
+LOG_DIR="$MOCAP_REPO_ROOT/target/check"
+mkdir -p "$LOG_DIR"
+ALLOWLIST="$MOCAP_REPO_ROOT/scripts/panic-allowlist.txt"
+NOSTD_TARGET=thumbv6m-none-eabi
+FILTER=("$@")
+PASSED=0
+FAILED=()
+
+wanted() {
+    [ "${#FILTER[@]}" -eq 0 ] && return 0
+    local f
+    for f in "${FILTER[@]}"; do
+        [[ "$1" == "$f"* ]] && return 0
+    done
+    return 1
+}
+
+# step NAME CMD...: runs CMD with its output in target/check/NAME.log.
+step() {
+    local name="$1" t0=$SECONDS rc=0
+    shift
+    wanted "$name" || return 0
+    printf 'check: %-34s ' "$name"
+    : >"$LOG_DIR/$name.log"
+    MOCAP_LOG_TAIL=40 mocap_logged "$LOG_DIR/$name.log" "$@" 2>"$LOG_DIR/$name.why" || rc=$?
+    if [ "$rc" -eq 0 ]; then
+        printf 'ok (%ss)\n' "$((SECONDS - t0))"
+        PASSED=$((PASSED + 1))
+    else
+        printf 'FAILED (%ss)\n' "$((SECONDS - t0))"
+        sed 's/^/    /' "$LOG_DIR/$name.why"
+        FAILED+=("$name")
+    fi
+}
+
+# ---- fmt, clippy
+fmt_all() {
+    local rc=0
+    cargo fmt --all --check || rc=1
+    cargo fmt --manifest-path firmware-example/Cargo.toml --check || rc=1
+    cargo fmt --manifest-path decoder-nostd/fuzz/Cargo.toml --check || rc=1
+    [ "$rc" -eq 0 ] || echo "formatting differs (above): run cargo fmt in the crate named"
+    return "$rc"
+}
+
+# ---- the board table against build.rs
+boards_agree() {
+    local b mem rc=0
+    for b in $(mocap_boards); do
+        mem="$(mocap_board_memory "$b")"
+        if [ ! -f "firmware-example/$mem" ]; then
+            echo "board $b: memory map firmware-example/$mem does not exist"
+            rc=1
+        fi
+        # build.rs: ("board-B", "memory", ...) on consecutive lines (rustfmt's layout) or one.
+        if ! tr -d ' \n' <firmware-example/build.rs | grep -qF "(\"board-$b\",\"$mem\","; then
+            echo "board $b: firmware-example/build.rs does not map feature board-$b to $mem"
+            rc=1
+        fi
+        if ! grep -q "^board-$b = " firmware-example/Cargo.toml; then
+            echo "board $b: firmware-example/Cargo.toml has no feature board-$b"
+            rc=1
+        fi
+    done
+    return "$rc"
+}
+
+# ---- firmware clippy: every mode of one board (the mode's constants change what clippy sees)
+fw_clippy() {
+    local board="$1" target mode rc=0
+    target="$(mocap_board_target "$board")"
+    mocap_toolchain_setup "$target" || return 1
+    for mode in "" MOCAP_SAMPLE_US=20000 MOCAP_SERVO=pca9685 MOCAP_STREAM=1; do
+        echo "== mode: ${mode:-frames}"
+        (
+            cd firmware-example
+            # Not scripts/firmware.sh's target dir: sharing it would rerun the firmware's build
+            # script with these modes and so relink the ELF of its next build.
+            env MOCAP_SAMPLE_US= MOCAP_SERVO= MOCAP_STREAM= $mode CARGO_TARGET_DIR="target/clippy-$board" \
+                mocap_cargo "$target" clippy --release --no-default-features --features "board-$board" \
+                -- -D warnings
+        ) || { echo "clippy failed for board $board, mode ${mode:-frames}"; rc=1; }
+    done
+    return "$rc"
+}
+
+# ---- no_std builds
+nostd_build() {
+    local package="$1"
+    shift
+    mocap_toolchain_setup "$NOSTD_TARGET" || return 1
+    CARGO_TARGET_DIR="$MOCAP_REPO_ROOT/target/check-nostd" \
+        mocap_cargo "$NOSTD_TARGET" build -p "$package" --no-default-features "$@"
+}
+
+# ---- panic machinery in the firmware ELF
+# Symbols that are panic machinery (demangled names).
+PANIC_RE='core::panicking::|panic_fmt|panic_bounds_check|unwrap_failed|expect_failed|_index_len_fail|slice_index_order_fail|len_mismatch_fail|panic_const_|panic_nounwind|rust_begin_unwind'
+
+# Call sites into panic machinery from outside it, one per line:
+#   SYMBOL <- ORIGIN<TAB>ADDRESS<TAB>LOCATION
+# ORIGIN is the innermost frame (of the inlining chain at the call) outside Rust's own library,
+# const generic arguments removed (`Player<320>` -> `Player`); LOCATION is its file:line.
+panic_call_sites() {
+    local elf="$1" dis
+    dis="$(mktemp)"
+    llvm-objdump -d -C --no-show-raw-insn "$elf" >"$dis"
+    awk -v re="$PANIC_RE" '
+        /^[0-9a-f]+ <.*>:$/ {
+            name = $0; sub(/^[0-9a-f]+ </, "", name); sub(/>:$/, "", name)
+            if (name !~ /^\$[dt]/) fn = name
+            next
+        }
+        # Any instruction naming a panic symbol: bl, b.w, conditional tail branches (bhs.w), ...
+        /^ *[0-9a-f]+:[ \t]/ && match($0, /\t0x[0-9a-f]+ <.*>/) {
+            t = substr($0, RSTART + 1); sub(/^0x[0-9a-f]+ </, "", t)
+            sub(/>[ \t]*(@.*)?$/, "", t); sub(/\+0x[0-9a-f]+$/, "", t)
+            if (t ~ re && fn !~ re) { a = $1; sub(/:$/, "", a); print a "\t" t }
+        }' "$dis" | sort -u | while IFS=$'\t' read -r addr sym; do
+        local chain origin="" loc="" fnname file
+        chain="$(llvm-symbolizer --inlining -C -e "$elf" "0x$addr")"
+        # Pairs of lines: function, file:line:col (innermost first).
+        while IFS= read -r fnname && IFS= read -r file; do
+            [ -z "$fnname" ] && break
+            case "$file" in
+                */rustlib/src/*|*/library/core/*|*/library/compiler-builtins/*) continue ;;
+            esac
+            origin="$fnname"
+            loc="${file#"$MOCAP_REPO_ROOT"/}"
+            break
+        done <<<"$chain"
+        if [ -z "$origin" ]; then
+            origin="$(head -n1 <<<"$chain")"
+            loc="$(sed -n 2p <<<"$chain" | sed 's|.*/library/|library/|')"
+        fi
+        origin="$(sed -E 's/<[0-9]+>//g' <<<"$origin")"
+        printf '%s <- %s\t0x%s\t%s\n' "$sym" "$origin" "$addr" "$loc"
+    done
+    rm -f "$dis"
+}
+
+panic_free() {
+    local board="$1" elf sites allowed unexpected syms
+    command -v llvm-objdump >/dev/null && command -v llvm-symbolizer >/dev/null && command -v llvm-nm >/dev/null \
+        || mocap_ensure_packages llvm || return 1
+    : >"$LOG_DIR/panic-sites-$board.txt"
+    elf="$(bash scripts/firmware.sh build --board "$board" | tail -n1)" || return 1
+    echo "ELF: $elf"
+    syms="$(llvm-nm -C --defined-only "$elf" | cut -d' ' -f3- | grep -E "$PANIC_RE" || true)"
+    if [ -z "$syms" ]; then
+        echo "no panic machinery"
+        return 0
+    fi
+    printf 'panic machinery present:\n%s\n' "$(sed 's/^/  /' <<<"$syms")"
+    sites="$(panic_call_sites "$elf")"
+    printf 'call sites (symbol <- origin, address, source):\n%s\n' "$(sed 's/^/  /' <<<"$sites")"
+    allowed="$(sed -e 's/[[:space:]]*#.*$//' -e '/^[[:space:]]*$/d' "$ALLOWLIST" | sort -u)"
+    unexpected="$(cut -f1 <<<"$sites" | sort -u | comm -23 - <(printf '%s\n' "$allowed") || true)"
+    printf '%s\n' "$sites" | cut -f1 | sort -u >"$LOG_DIR/panic-sites-$board.txt"
+    if [ -n "$unexpected" ]; then
+        echo "call sites into panic machinery that scripts/panic-allowlist.txt does not allow:"
+        grep -F -f <(printf '%s\n' "$unexpected") <<<"$sites" | sed 's/^/  /'
+        echo "remove them (get()/slice patterns/iterators instead of indexing, checked_* instead of / and %),"
+        echo "or add the exact 'symbol <- origin' line with why it cannot fire to scripts/panic-allowlist.txt"
+        return 1
+    fi
+    [ -n "$sites" ] || { echo "panic symbols without a call site from outside them: dead code kept by the linker?"; return 1; }
+    echo "every call site is allowed (scripts/panic-allowlist.txt)"
+}
+
+# ---- the steps
+step fmt fmt_all
+step clippy cargo clippy --workspace --all-targets -- -D warnings
+step boards boards_agree
+for b in $(mocap_boards); do
+    step "fw-clippy-$b" fw_clippy "$b"
+done
+step nostd-decoder nostd_build mocap-decoder
+for f in codec-index codec-pca-spline codec-predictive defmt; do
+    step "nostd-decoder-$f" nostd_build mocap-decoder --features "$f"
+done
+step nostd-servo nostd_build mocap-servo
+step nostd-servo-pca9685 nostd_build mocap-servo --features pca9685
+for b in $(mocap_boards); do
+    step "panic-$b" panic_free "$b"
+done
+# Allowances no board needs any more.
+if wanted panic && [ -f "$ALLOWLIST" ]; then
+    stale="$(sed -e 's/[[:space:]]*#.*$//' -e '/^[[:space:]]*$/d' "$ALLOWLIST" | sort -u \
+        | comm -23 - <(cat "$LOG_DIR"/panic-sites-*.txt 2>/dev/null | sort -u) || true)"
+    [ -z "$stale" ] || printf 'check: note: allowed in scripts/panic-allowlist.txt but found on no board (remove?):\n%s\n' \
+        "$(sed 's/^/    /' <<<"$stale")"
+fi
+
+if [ "${#FAILED[@]}" -gt 0 ]; then
+    echo "check: FAILED: ${FAILED[*]} (logs: target/check/)"
+fi
+echo "checks: $PASSED passed, ${#FAILED[@]} failed"
+[ "${#FAILED[@]}" -eq 0 ]
