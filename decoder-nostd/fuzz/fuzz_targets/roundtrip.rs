@@ -14,6 +14,8 @@ use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
 
 /// Channels of the largest motion: a root with 6 channels and 3 more joints with 3 each.
 const MAX_CHANNELS: usize = 6 + 3 * 3;
+/// Player state: the predictive codec keeps two frames of history per channel.
+const PLAYER_WORDS: usize = 4 * MAX_CHANNELS;
 /// Frames of the largest motion.
 const MAX_FRAMES: usize = 48;
 /// Source length unit: centimetres.
@@ -113,7 +115,7 @@ fuzz_target!(|input: Input| {
         return;
     };
     let clip = Clip::parse(&encoded.bytes).expect("the encoder's clip parses");
-    let mut player = Player::<MAX_CHANNELS>::new(&clip).expect("the encoder's clip plays");
+    let mut player = Player::<PLAYER_WORDS>::new(&clip).expect("the encoder's clip plays");
     assert_eq!(player.frame_count() as usize, m.frames());
     assert_eq!(player.channel_count(), m.channels());
     let kinds = m.skeleton.channel_kinds();
