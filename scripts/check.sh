@@ -99,8 +99,9 @@ fw_clippy() {
             cd firmware-example
             # Not scripts/firmware.sh's target dir: sharing it would rerun the firmware's build
             # script with these modes and so relink the ELF of its next build.
-            env MOCAP_SAMPLE_US= MOCAP_SERVO= MOCAP_STREAM= $mode CARGO_TARGET_DIR="target/clippy-$board" \
-                mocap_cargo "$target" clippy --release --no-default-features --features "board-$board" \
+            export MOCAP_SAMPLE_US="" MOCAP_SERVO="" MOCAP_STREAM="" CARGO_TARGET_DIR="target/clippy-$board"
+            [ -z "$mode" ] || export "${mode?}"
+            mocap_cargo "$target" clippy --release --no-default-features --features "board-$board" \
                 -- -D warnings
         ) || { echo "clippy failed for board $board, mode ${mode:-frames}"; rc=1; }
     done

@@ -212,19 +212,32 @@ mocap_toolchain_route() {
     printf '%s\n' "${!var}"
 }
 
-# mocap_cargo TARGET CARGO-ARGS...: runs `cargo CARGO-ARGS... --target TARGET` through the route of
-# TARGET. Run it from the firmware directory (or pass --manifest-path).
+# mocap_cargo TARGET CARGO-ARGS... [-- TOOL-ARGS...]: runs `cargo CARGO-ARGS... --target TARGET
+# [-- TOOL-ARGS...]` through the route of TARGET (the target options go before a `--`, so
+# `mocap_cargo T clippy -- -D warnings` works). Run it from the firmware directory (or pass
+# --manifest-path).
 mocap_cargo() {
     if [ "$#" -lt 2 ]; then
-        _mocap_err "usage: mocap_cargo TARGET CARGO-SUBCOMMAND [ARGS...]"
+        _mocap_err "usage: mocap_cargo TARGET CARGO-SUBCOMMAND [ARGS...] [-- TOOL-ARGS...]"
         return 2
     fi
-    local target="$1" route
+    local target="$1" route args=() tool=() seen=0 a
     shift
+    for a in "$@"; do
+        if [ "$seen" -eq 0 ] && [ "$a" = -- ]; then
+            seen=1
+        elif [ "$seen" -eq 0 ]; then
+            args+=("$a")
+        else
+            tool+=("$a")
+        fi
+    done
+    [ "$seen" -eq 1 ] && tool=(-- "${tool[@]}")
+    set -- "${args[@]}"
     route="$(mocap_toolchain_route "$target")" || return 1
-    _mocap_log "cargo ($route) $* --target $target"
+    _mocap_log "cargo ($route) $* --target $target ${tool[*]}"
     if [ "$route" = rustup ]; then
-        cargo "$@" --target "$target"
+        cargo "$@" --target "$target" "${tool[@]}"
     else
         local upper="${target^^}" path="$PATH"
         upper="${upper//[-.]/_}"
@@ -235,7 +248,7 @@ mocap_cargo() {
         fi
         env PATH="$path" RUSTC_BOOTSTRAP=1 RUSTC="$MOCAP_DEBIAN_RUSTC" \
             "CARGO_TARGET_${upper}_LINKER=ld.lld" \
-            "$MOCAP_DEBIAN_CARGO" "$@" -Zbuild-std=core --target "$target"
+            "$MOCAP_DEBIAN_CARGO" "$@" -Zbuild-std=core --target "$target" "${tool[@]}"
     fi
 }
 
