@@ -14,8 +14,9 @@ use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
 
 /// Channels of the largest motion: a root with 6 channels and 3 more joints with 3 each.
 const MAX_CHANNELS: usize = 6 + 3 * 3;
-/// Player state: the predictive codec keeps two frames of history per channel.
-const PLAYER_WORDS: usize = 4 * MAX_CHANNELS;
+/// Player state words: the predictive codec needs 3 per channel plus its adaptive model
+/// (`3 * channels + STATE_EXTRA_WORDS`); 512 as in `parse_and_play` holds every motion here.
+const PLAYER_WORDS: usize = 512;
 /// Frames of the largest motion.
 const MAX_FRAMES: usize = 48;
 /// Source length unit: centimetres.
