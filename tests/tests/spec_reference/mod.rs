@@ -385,10 +385,10 @@ impl Pca {
             }
             let a = catmull_rom(&g.times, &g.control, rel);
             for (row, &c) in channels.iter().enumerate() {
-                let mut acc: i32 = 64;
-                for j in 0..g.k {
-                    acc = acc.wrapping_add(g.basis[row][j].wrapping_mul(a[j]));
-                }
+                let acc = g.basis[row]
+                    .iter()
+                    .zip(&a)
+                    .fold(64i32, |acc, (&b, &a)| acc.wrapping_add(b.wrapping_mul(a)));
                 out[c] = (g.mean[row] << g.ms).wrapping_add(acc >> 7);
             }
         }
@@ -591,8 +591,12 @@ pub struct Residuals {
     /// `q[frame][channel]`.
     pub q: Vec<Vec<i64>>,
     /// Per block, every bit read (see [`RangeDecoder::trace`]).
-    pub traces: Vec<Vec<(Option<u32>, u32, u32, u32)>>,
+    pub traces: Vec<Vec<TracedBit>>,
 }
+
+/// One bit read: `(p before, or None for a direct bit; range and code
+/// before; the bit)`.
+pub type TracedBit = (Option<u32>, u32, u32, u32);
 
 /// LZMA's range decoder as §5b.2 gives it.
 pub struct RangeDecoder<'a> {
@@ -600,9 +604,8 @@ pub struct RangeDecoder<'a> {
     next: usize,
     range: u32,
     code: u32,
-    /// Every bit read: `(p before, or None for a direct bit; range and
-    /// code before; the bit)`, for SPEC.md's worked example.
-    pub trace: Vec<(Option<u32>, u32, u32, u32)>,
+    /// Every bit read, for SPEC.md's worked example.
+    pub trace: Vec<TracedBit>,
 }
 
 impl<'a> RangeDecoder<'a> {
