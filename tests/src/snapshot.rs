@@ -132,15 +132,69 @@ pub fn check_snapshot(case: &str, data: &str) {
     }
     let dir = crate::workspace_root().join("target/qemu-parity");
     std::fs::create_dir_all(&dir).unwrap();
-    let actual = dir.join(format!("{case}.actual.out"));
-    std::fs::write(&actual, data).unwrap();
+    std::fs::write(dir.join(format!("{case}.actual.out")), data).unwrap();
     panic!(
-        "{case}: the firmware's UART output differs from its snapshot {}: {}\n\
-         (whole output in {}; MOCAP_BLESS=1 accepts it)",
-        path.display(),
-        first_difference(&expected, &got),
-        actual.display()
+        "{case}: the firmware's UART output differs from its snapshot \
+         tests/snapshots/{case}.out\n{}\n(whole output in target/qemu-parity/{case}.actual.out; \
+         MOCAP_BLESS=1 accepts it)",
+        snapshot_difference(&expected, &got)
     );
+}
+
+/// A rendered snapshot: its summary line, and the data lines it shows with
+/// their line numbers (from 1).
+fn parse_rendered(text: &str) -> (&str, Vec<(usize, &str)>) {
+    let mut lines = text.lines();
+    let summary = lines.next().unwrap_or("");
+    let mut shown = Vec::new();
+    let mut n = 0;
+    for l in lines {
+        let skipped = l
+            .strip_prefix("# … ")
+            .and_then(|r| r.strip_suffix(" lines …"))
+            .and_then(|k| k.parse::<usize>().ok());
+        match skipped {
+            Some(k) => n += k,
+            None => {
+                n += 1;
+                shown.push((n, l));
+            }
+        }
+    }
+    (summary, shown)
+}
+
+/// Line `n` of `shown`, if the snapshot shows it.
+fn shown_line<'a>(shown: &[(usize, &'a str)], n: usize) -> Option<&'a str> {
+    shown.iter().find(|&&(m, _)| m == n).map(|&(_, l)| l)
+}
+
+/// How two rendered snapshots differ: both summary lines, then the first
+/// differing data lines shown (at most three), numbered as in the output.
+pub fn snapshot_difference(expected: &str, got: &str) -> String {
+    let (es, e) = parse_rendered(expected);
+    let (gs, g) = parse_rendered(got);
+    let mut s = format!("  snapshot: {es}\n  this run: {gs}");
+    let mut numbers: Vec<usize> = e.iter().chain(&g).map(|&(n, _)| n).collect();
+    numbers.sort_unstable();
+    numbers.dedup();
+    let mut shown = 0;
+    for n in numbers {
+        let (x, y) = (shown_line(&e, n), shown_line(&g, n));
+        if x != y && shown < 3 {
+            let _ = write!(
+                s,
+                "\n  line {n}:\n    expected: {}\n    got:      {}",
+                x.map_or("(not shown)", clip_line),
+                y.map_or("(not shown)", clip_line)
+            );
+            shown += 1;
+        }
+    }
+    if shown == 0 {
+        s += "\n  the lines shown agree: the difference is in lines the snapshot only counts";
+    }
+    s
 }
 
 #[cfg(test)]
@@ -160,6 +214,28 @@ mod tests {
             ["a", "b"]
         );
         assert_eq!(render("").lines().count(), 1);
+    }
+
+    #[test]
+    fn snapshot_differences_are_numbered_as_the_output() {
+        let a: String = (0..10).map(|i| format!("f {i}\n")).collect();
+        let b = a.replace("f 2\n", "f x\n");
+        let d = snapshot_difference(&render(&a), &render(&b));
+        assert!(
+            d.contains("line 3:\n    expected: f 2\n    got:      f x"),
+            "{d}"
+        );
+        let c = a.replace("f 6\n", "f y\n");
+        let d = snapshot_difference(&render(&a), &render(&c));
+        assert!(
+            d.contains("the difference is in lines the snapshot only counts"),
+            "{d}"
+        );
+        let d = snapshot_difference(&render(&a), &render("f 0\n"));
+        assert!(
+            d.contains("line 2:\n    expected: f 1\n    got:      (not shown)"),
+            "{d}"
+        );
     }
 
     #[test]
