@@ -1,6 +1,7 @@
 //! A reference decoder written from SPEC.md's prose alone — the container
-//! (§2), the compact header (§3.4), `pca-spline` (§5) and `predictive`
-//! (§5b) — sharing no code with `mocap-decoder` or `mocap-encoder`. The
+//! (§2), the header in both forms (§3.1, §3.4), `index` (§4), `pca-spline`
+//! (§5) and `predictive` (§5b) — sharing no code with `mocap-decoder` or
+//! `mocap-encoder`. The
 //! spec examples are decoded with it and with the real decoder; both must
 //! give the values SPEC.md states. Written for clarity, not speed: it
 //! panics on anything malformed (the examples are valid clips).
@@ -14,11 +15,12 @@ pub struct Clip {
 }
 
 pub enum Codec {
+    Index(Index),
     PcaSpline(Pca),
     Predictive(Predictive),
 }
 
-/// §2: preamble, section table, CRC; §3.4: the compact header's counts.
+/// §2: preamble, section table, CRC; §3.1 / §3.4: the header's counts.
 pub fn parse(bytes: &[u8]) -> Clip {
     assert_eq!(&bytes[..4], b"MOCB", "magic");
     assert_eq!(bytes[4..6], [1, 0], "version 1, flags 0");
@@ -38,15 +40,47 @@ pub fn parse(bytes: &[u8]) -> Clip {
         let (offset, len) = (u32_at(entry + 4), u32_at(entry + 8));
         let section = &bytes[offset..offset + len];
         match bytes[entry] {
-            0x02 => header = Some(section),
-            id @ (0x11 | 0x12) => codec = Some((id, section)),
+            id @ (0x01 | 0x02) => header = Some((id, section)),
+            id @ (0x10..=0x12) => codec = Some((id, section)),
             id => panic!("the reference reads no section {id:#04x}"),
         }
     }
-    let mut r = Reader::new(header.expect("a compact header"));
+    let (header_id, header) = header.expect("a header");
+    let mut r = Reader::new(header);
     let mut frame_time_ns = r.varint();
     let (frame_count, channels);
-    if frame_time_ns == 0 {
+    if header_id == 0x01 {
+        // §3.1: postcard.
+        frame_count = r.varint();
+        let _source_unit_nm = r.varint();
+        let joints = r.varint();
+        let mut kinds = 0;
+        for _ in 0..joints {
+            let name = r.varint() as usize;
+            r.take(name);
+            match r.u8() {
+                0 => {}
+                1 => {
+                    r.varint();
+                }
+                b => panic!("option byte {b}"),
+            }
+            for _ in 0..3 {
+                r.zigzag();
+            }
+            assert!(r.u8() <= 1, "bool");
+            let n = r.varint() as usize;
+            r.take(n);
+            kinds += n;
+        }
+        channels = r.varint() as usize;
+        assert_eq!(channels, kinds, "one channel per kind");
+        for _ in 0..channels {
+            r.u8();
+            let (min, max) = (r.zigzag(), r.zigzag());
+            assert!(min <= max);
+        }
+    } else if frame_time_ns == 0 {
         // §3.4.1 servo form.
         frame_time_ns = r.varint();
         frame_count = r.varint();
@@ -79,6 +113,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
     assert!(r.done(), "header trailing bytes");
     let (id, section) = codec.expect("a codec section");
     let codec = match id {
+        0x10 => Codec::Index(Index::parse(section, channels)),
         0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
         _ => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
     };
@@ -98,6 +133,7 @@ impl Clip {
                 .map(|i| p.pose(u64::from(i) << 16, self.channels))
                 .collect(),
             Codec::Predictive(p) => p.decode(self.channels, self.frame_count),
+            Codec::Index(x) => x.decode(self.channels, self.frame_count),
         }
     }
 
@@ -118,7 +154,7 @@ impl Clip {
                 };
                 p.pose(pos, self.channels)
             }
-            Codec::Predictive(_) => {
+            Codec::Predictive(_) | Codec::Index(_) => {
                 let frames = self.frames();
                 if i >= last {
                     return frames[last as usize].clone();
@@ -214,6 +250,121 @@ impl Bits<'_> {
         }
         self.bit += width as usize;
         v
+    }
+}
+
+// ---------------------------------------------------------------- §4
+
+#[derive(Debug)]
+pub struct Index {
+    pub key_interval: u32,
+    pub key_set: Vec<IndexGroup>,
+    pub delta_set: Vec<IndexGroup>,
+    pub pool: Vec<i32>,
+    pub payload: Vec<u8>,
+}
+
+/// A group of a set: `(bits, shift, accumulate)` and its entries
+/// `(channel, table, base)`.
+#[derive(Debug)]
+pub struct IndexGroup {
+    pub bits: u32,
+    pub shift: u32,
+    pub accumulate: bool,
+    pub entries: Vec<(usize, usize, i32)>,
+}
+
+impl Index {
+    /// §4.1, §4.2.
+    pub fn parse(section: &[u8], channels: usize) -> Index {
+        let mut r = Reader::new(section);
+        let u16_le = |r: &mut Reader<'_>| u16::from_le_bytes([r.u8(), r.u8()]);
+        let key_interval = u32::from(u16_le(&mut r));
+        assert_eq!(usize::from(u16_le(&mut r)), channels);
+        let t = u32::from_le_bytes(r.take(4).try_into().unwrap()) as usize;
+        let set = |r: &mut Reader<'_>| -> Vec<IndexGroup> {
+            let groups = u16_le(r);
+            (0..groups)
+                .map(|_| {
+                    let bits = u32::from(r.u8());
+                    let flags = r.u8();
+                    assert!(bits <= 12 && flags & 0x60 == 0 && u32::from(flags & 0x1F) <= 24);
+                    let count = u16_le(r);
+                    let entries = (0..count)
+                        .map(|_| {
+                            let channel = usize::from(u16_le(r));
+                            let table = usize::from(u16_le(r));
+                            let base = i32::from_le_bytes(r.take(4).try_into().unwrap());
+                            assert!(channel < channels && table + (1 << bits) <= t);
+                            (channel, table, base)
+                        })
+                        .collect();
+                    IndexGroup {
+                        bits,
+                        shift: u32::from(flags & 0x1F),
+                        accumulate: flags & 0x80 != 0,
+                        entries,
+                    }
+                })
+                .collect()
+        };
+        let key_set = set(&mut r);
+        assert!(key_set.iter().all(|g| !g.accumulate));
+        let delta_set = if key_interval > 0 {
+            set(&mut r)
+        } else {
+            Vec::new()
+        };
+        let pool = (0..t)
+            .map(|_| i32::from(i16::from_le_bytes([r.u8(), r.u8()])))
+            .collect();
+        let payload = r.bytes[r.pos..].to_vec();
+        Index {
+            key_interval,
+            key_set,
+            delta_set,
+            pool,
+            payload,
+        }
+    }
+
+    /// §4.3, §4.4: every frame, in order.
+    pub fn decode(&self, channels: usize, frames: u32) -> Vec<Vec<i32>> {
+        let bits_of = |set: &[IndexGroup]| -> usize {
+            set.iter().map(|g| g.bits as usize * g.entries.len()).sum()
+        };
+        let (kb, db) = (bits_of(&self.key_set), bits_of(&self.delta_set));
+        let k = self.key_interval as usize;
+        let keys = |f: usize| if k == 0 { f } else { f.div_ceil(k) };
+        let start = |f: usize| keys(f) * kb + (f - keys(f)) * db;
+        assert_eq!(self.payload.len(), start(frames as usize).div_ceil(8));
+        let mut bits = Bits {
+            bytes: &self.payload,
+            bit: 0,
+        };
+        let mut value = vec![0i32; channels];
+        let mut out = Vec::new();
+        for f in 0..frames as usize {
+            assert_eq!(bits.bit, start(f), "records back to back");
+            let key = k == 0 || f % k == 0;
+            if key {
+                value.fill(0);
+            }
+            let set = if key { &self.key_set } else { &self.delta_set };
+            for g in set {
+                for &(c, table, base) in &g.entries {
+                    let i = bits.read(g.bits) as usize;
+                    let v = base.wrapping_add(self.pool[table + i].wrapping_shl(g.shift));
+                    value[c] = if g.accumulate {
+                        value[c].wrapping_add(v)
+                    } else {
+                        v
+                    };
+                }
+            }
+            out.push(value.clone());
+        }
+        out
     }
 }
 
