@@ -107,8 +107,9 @@ impl<'a> Cursor<'a> {
         if let Some(slot) = self.buf.get_mut(self.len) {
             *slot = byte;
         }
-        // Counts on past the buffer (the length a caller needed).
-        self.len = self.len.saturating_add(1);
+        // Counts on past the buffer (the length a caller needed); at most a
+        // group move's length, far from wrapping.
+        self.len = self.len.wrapping_add(1);
     }
 
     fn decimal(&mut self, mut value: u32) {
