@@ -9,7 +9,7 @@ use mocap_servo::output::{MaestroOutput, ServoOutput, Ssc32Output};
 use mocap_servo::record::{RecordError, SerialRecorder};
 use mocap_servo::{ssc32, stream, Message, OutputError, Playback, ServoLimits};
 
-use crate::rig::{Rig, ServoTracks};
+use crate::rig::{Rig, Servo, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
 
 /// Serial servo-controller protocol.
@@ -138,7 +138,7 @@ pub fn servo_stream(
     let frame_time = 1000.0 / f64::from(rate_mhz);
     let motion = fixed::from_fixed(&skeleton, frame_time, &samples, metres_per_unit);
     let tracks = rig.servo_tracks(&motion, &channels, metres_per_unit);
-    let servos: Vec<RigServo> = rig.servos.iter().map(servo_clip::table_entry).collect();
+    let servos: Vec<RigServo> = rig.servos.iter().map(Servo::rig_servo).collect();
     let targets: Vec<Vec<u16>> = (0..count)
         .map(|i| tracks.servos.iter().map(|t| t.pulses[i]).collect())
         .collect();

@@ -76,6 +76,7 @@ pub use report::{
 pub use shape::{MAX_ROTATION_DEG, REWRAP_HYSTERESIS_DEG};
 
 use crate::motion::ChannelKind;
+use mocap_decoder::RigServo;
 
 /// Servo update rate when `[rig] rate_hz` is not given.
 pub const DEFAULT_RATE_HZ: f64 = 50.0;
@@ -209,6 +210,27 @@ impl Servo {
     pub fn neutral_angle(&self) -> f64 {
         let t = (self.neutral - self.pulse[0]) / (self.pulse[1] - self.pulse[0]);
         self.angle[0] + t * (self.angle[1] - self.angle[0])
+    }
+
+    /// This servo as the rig table stores it (SPEC.md §3.5) and as the
+    /// firmware and `mocap play` run it (`mocap_servo::Playback`): integer
+    /// millidegrees and quarter-microseconds. The one conversion from the
+    /// file's form to the runtime one; the limiter's `ServoLimits` come from
+    /// the `RigServo` (`ServoLimits::for_servo`).
+    pub fn rig_servo(&self) -> RigServo {
+        let mdeg = |v: f64| (v * 1000.0).round() as i32;
+        let qus = |us: f64| (us * 4.0).round().clamp(0.0, f64::from(u16::MAX)) as u16;
+        RigServo {
+            output: self.output,
+            angle_lo_mdeg: mdeg(self.angle[0]),
+            angle_hi_mdeg: mdeg(self.angle[1]),
+            pulse_lo_qus: qus(self.pulse[0]),
+            pulse_hi_qus: qus(self.pulse[1]),
+            neutral_qus: self.neutral_quarter_us(),
+            max_speed_mdeg_s: self.max_speed.map_or(0, |v| {
+                (v * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
+            }),
+        }
     }
 
     fn clamp_quarter_us(&self, q: f64) -> u16 {
