@@ -61,7 +61,7 @@ pub fn rig_of(clip: &Clip<'_>) -> Result<Rig, Failure> {
     let table = clip
         .rig()
         .ok_or(Failure::Servo("the clip has no rig table"))?;
-    Rig::from_rig(&table).map_err(|e| match e {
+    Rig::from_rig(table).map_err(|e| match e {
         PlaybackError::Limits { error, .. } => Failure::ServoCrate("limits", error),
         _ => Failure::Servo("more servos than MAX_SERVOS"),
     })

@@ -559,7 +559,7 @@ impl Mode for Stream {
             let clip = upload
                 .complete(&buffer)
                 .and_then(|bytes| decoder_glue::parse(bytes).ok())
-                .filter(|clip| clip.rig().is_some_and(|rig| driver.rig.matches(&rig)));
+                .filter(|clip| clip.rig().is_some_and(|rig| driver.rig.matches(rig)));
             let Some(clip) = clip else {
                 // Corrupt or another rig's: forget it, so that a later pass can refill it.
                 upload.reset();
