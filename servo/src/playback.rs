@@ -344,6 +344,26 @@ mod tests {
         assert_eq!(bytes.len(), 2 * 2 * 4);
     }
 
+    /// A rig already at neutral parks in no tick (as the firmware always did;
+    /// `mocap play` used to send one more neutral tick).
+    #[test]
+    fn park_at_neutral_sends_nothing() {
+        let mut p = Playback::<2>::new([servo(4, 90_000)], 50_000).unwrap();
+        let outputs = p.outputs();
+        let mut bytes = std::vec::Vec::new();
+        let mut out = MaestroOutput::new(&mut bytes, &outputs[..1]).unwrap();
+        p.tick(&[6000, 6000], &mut out).unwrap();
+        let mut ticks = 0;
+        p.park(&mut out, |_| {
+            ticks += 1;
+            Ok::<_, OutputError<_>>(())
+        })
+        .unwrap();
+        assert_eq!(ticks, 0);
+        drop(out);
+        assert_eq!(bytes, [0x84, 4, 0x70, 0x2e]);
+    }
+
     #[test]
     fn too_many_servos_and_bad_limits_are_refused() {
         assert_eq!(
