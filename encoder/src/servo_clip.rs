@@ -52,21 +52,10 @@ fn signals_motion(rig: &Rig, angles: &[&[f64]], frame_time: f64) -> Motion {
 
 /// A rig servo as the rig table stores it (SPEC.md §3.5): integer
 /// millidegrees and quarter-microseconds, the form the decoder and the
-/// firmware map and limit with.
+/// firmware map and limit with: [`Servo::rig_servo`], the one conversion
+/// from the file's form.
 pub fn table_entry(s: &Servo) -> RigServo {
-    let mdeg = |v: f64| (v * 1000.0).round() as i32;
-    let qus = |us: f64| (us * 4.0).round().clamp(0.0, f64::from(u16::MAX)) as u16;
-    RigServo {
-        output: s.output,
-        angle_lo_mdeg: mdeg(s.angle[0]),
-        angle_hi_mdeg: mdeg(s.angle[1]),
-        pulse_lo_qus: qus(s.pulse[0]),
-        pulse_hi_qus: qus(s.pulse[1]),
-        neutral_qus: s.neutral_quarter_us(),
-        max_speed_mdeg_s: s.max_speed.map_or(0, |v| {
-            (v * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
-        }),
-    }
+    s.rig_servo()
 }
 
 /// The rig's servo rate in millihertz.

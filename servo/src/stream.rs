@@ -143,14 +143,17 @@ pub fn encode_frame(message: &Message<'_>, buf: &mut [u8]) -> Result<usize, Erro
     rest.get_mut(..CRC_LEN)
         .ok_or(Error::FrameMessage)?
         .copy_from_slice(&crc);
-    let payload = payload.get(..message_len + CRC_LEN).unwrap_or_default();
+    let payload = payload
+        .get(..message_len.saturating_add(CRC_LEN))
+        .unwrap_or_default();
 
-    let needed = cobs::max_encoding_length(payload.len()) + 1;
+    let needed = cobs::max_encoding_length(payload.len()).saturating_add(1);
     let available = buf.len();
     let too_small = Error::BufferTooSmall { needed, available };
     let encoded_len = cobs::try_encode(payload, buf).map_err(|_| too_small)?;
     *buf.get_mut(encoded_len).ok_or(too_small)? = DELIMITER;
-    Ok(encoded_len + 1)
+    // encoded_len < buf.len(): the delimiter's slot exists.
+    Ok(encoded_len.wrapping_add(1))
 }
 
 /// Decodes one frame, with or without its final delimiter, in place; the
@@ -291,7 +294,7 @@ impl<const CAP: usize> FrameReceiver<CAP> {
     }
 
     fn store(&mut self, bytes: &[u8]) {
-        let end = self.len + bytes.len();
+        let end = self.len.saturating_add(bytes.len());
         match self.buf.get_mut(self.len..end) {
             Some(slot) if !self.overflowed => {
                 slot.copy_from_slice(bytes);
