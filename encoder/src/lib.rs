@@ -1,5 +1,12 @@
-//! The `mocap` encoder: read motion, encode it into `.mcb` bitstreams,
-//! decode and evaluate them with the same `no_std` decoder the MCU runs.
+//! The `mocap` encoder library: read motion, encode it into `.mcb`
+//! bitstreams, decode and evaluate them with the same `no_std` decoder the
+//! MCU runs. The `mocap` command line is the `mocap-cli` crate; nothing here
+//! parses arguments or prints errors — every area returns its typed error.
+//!
+//! Motion in and out: [`bvh`], [`motion`], [`units`], [`kinematics`],
+//! [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
+//! [`clipfile`], [`metrics`]. Servos: [`rig`], [`servo_clip`], [`play`].
+//! Reports over them: [`bench`], [`plot`], [`track`].
 
 pub mod bench;
 pub mod bvh;

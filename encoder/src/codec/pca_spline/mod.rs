@@ -8,7 +8,7 @@
 //! degrees): PCA keeps components until every frame's residual is under
 //! `pca_share·τ`, keys are added until the spline error is under
 //! `key_share·τ`, and key values are quantised so their error stays near
-//! `quant_share·τ`. The encode pipeline (encode.rs) measures the decoded
+//! `quant_share·τ`. The encode pipeline (encode/) measures the decoded
 //! clip and moves `τ` until the bound holds.
 
 pub mod keys;
