@@ -6,9 +6,9 @@
 //! Motion in and out: [`bvh`], [`motion`], [`units`], [`kinematics`],
 //! [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
 //! [`clipfile`], [`metrics`]. Servos: [`rig`], [`servo_clip`], [`play`].
-//! Reports over them: [`bench`], [`plot`], [`track`].
+//! The reports over them (bench, plots, Motion Track) are the
+//! `mocap-report` crate.
 
-pub mod bench;
 pub mod bvh;
 pub mod clipfile;
 pub mod codec;
@@ -20,8 +20,6 @@ pub mod kinematics;
 pub mod metrics;
 pub mod motion;
 pub mod play;
-pub mod plot;
 pub mod rig;
 pub mod servo_clip;
-pub mod track;
 pub mod units;

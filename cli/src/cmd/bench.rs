@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use mocap_encoder::codec::CodecChoice;
-use mocap_encoder::{bench, plot};
+use mocap_report::{bench, plot};
 
 use super::{write, CodecArg};
 

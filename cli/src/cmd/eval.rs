@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-use mocap_encoder::{bvh, clipfile, fixed, metrics, plot};
+use mocap_encoder::{bvh, clipfile, fixed, metrics};
+use mocap_report::plot;
 
 use super::{parse_clip, read_clip, UnitArg};
 

@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use mocap_encoder::track::idw::Scheme;
-use mocap_encoder::track::som::SomConfig;
-use mocap_encoder::track::{self, TrackJob, TrackOptions, DEFAULT_K, DEFAULT_NEIGHBOURS};
+use mocap_report::track::idw::Scheme;
+use mocap_report::track::som::SomConfig;
+use mocap_report::track::{self, TrackJob, TrackOptions, DEFAULT_K, DEFAULT_NEIGHBOURS};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

@@ -14,7 +14,7 @@
 //! In the `MOTION` section a frame row is exactly one line holding exactly
 //! one value per channel; the number of rows must equal `Frames`. Blank lines
 //! (e.g. at the end of the file) are ignored. End Sites become joints with
-//! [`Joint::end_site`] set, no channels, and the name `<parent>_End`
+//! [`Joint::end_site`](crate::motion::Joint::end_site) set, no channels, and the name `<parent>_End`
 //! (`<parent>_End2`, `<parent>_End3`, … for further End Sites of the same
 //! parent).
 //!
@@ -26,8 +26,8 @@
 //! decimals), so `parse_str(&write_string(&m))` reproduces `m` to within
 //! 1e-6.
 //!
-//! [`lexer`] splits the text into tokens and lines, [`reader`] builds the
-//! skeleton and the frames from them, [`writer`] renders a motion.
+//! `lexer` splits the text into tokens and lines, `reader` builds the
+//! skeleton and the frames from them, `writer` renders a motion.
 
 mod lexer;
 mod reader;

@@ -1,7 +1,7 @@
-//! The encode pipeline: tolerances from the error bound ([`bound`]), the
-//! codec and its search ([`search`]), the container, then a decode with the
+//! The encode pipeline: tolerances from the error bound (`bound`), the
+//! codec and its search (`search`), the container, then a decode with the
 //! `no_std` decoder that proves the bound before anything is written
-//! ([`proof`]), tightening and retrying if it does not hold.
+//! (`proof`), tightening and retrying if it does not hold.
 
 mod bound;
 mod proof;

@@ -4,7 +4,7 @@
 //! translation is dropped and its heading (the twist about the vertical Y
 //! axis, BVH's up axis) is removed, so only its tilt remains.
 
-use crate::motion::Motion;
+use mocap_encoder::motion::Motion;
 
 /// A quaternion `(w, x, y, z)`.
 pub type Quat = [f64; 4];

@@ -6,10 +6,12 @@ use std::path::{Path, PathBuf};
 
 use std::time::Instant;
 
-use crate::bvh;
-use crate::bvh::BvhError;
-use crate::encode::{self, Bound, BoundError, BoundSpec, CodecChoice, EncodeError, EncodeOptions};
-use crate::units;
+use mocap_encoder::bvh;
+use mocap_encoder::bvh::BvhError;
+use mocap_encoder::encode::{
+    self, Bound, BoundError, BoundSpec, CodecChoice, EncodeError, EncodeOptions,
+};
+use mocap_encoder::units;
 
 /// One row of the table.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -29,7 +31,7 @@ pub struct Row {
     /// Input file size.
     pub file_bytes: usize,
     /// Metrics of the encoded clip.
-    pub metrics: crate::metrics::Metrics,
+    pub metrics: mocap_encoder::metrics::Metrics,
     /// Key interval chosen.
     pub key_interval: u16,
     /// Wall-clock seconds of the encode (search included).

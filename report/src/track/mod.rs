@@ -23,11 +23,11 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::bvh::BvhError;
-use crate::motion::Motion;
 use crate::plot::PlotError;
 use features::QuatFrames;
 use idw::Scheme;
+use mocap_encoder::bvh::BvhError;
+use mocap_encoder::motion::Motion;
 use som::SomConfig;
 
 /// Why a Motion Track picture could not be made.
@@ -341,7 +341,7 @@ pub fn load(path: &Path) -> Result<Motion, TrackError> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcb"));
     if !is_mcb {
-        return Ok(crate::bvh::read_file(path)?);
+        return Ok(mocap_encoder::bvh::read_file(path)?);
     }
     let bytes = std::fs::read(path).map_err(|source| TrackError::Read {
         path: path.to_path_buf(),
@@ -352,7 +352,7 @@ pub fn load(path: &Path) -> Result<Motion, TrackError> {
         source,
     };
     let clip = mocap_decoder::Clip::parse(&bytes).map_err(clip_error)?;
-    crate::clipfile::to_motion(&clip).map_err(clip_error)
+    mocap_encoder::clipfile::to_motion(&clip).map_err(clip_error)
 }
 
 /// Legend name of a file: its stem, with "(decoded)" for a `.mcb`.
@@ -412,7 +412,7 @@ pub struct TrackReport {
 }
 
 fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>, TrackError> {
-    crate::bvh::expand(paths).map_err(TrackError::Folder)
+    mocap_encoder::bvh::expand(paths).map_err(TrackError::Folder)
 }
 
 /// `mocap track`: reads the clips, builds the reference space, places every

@@ -11,8 +11,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::bench::Row;
-use crate::metrics::positions_mm;
-use crate::motion::Motion;
+use mocap_encoder::metrics::positions_mm;
+use mocap_encoder::motion::Motion;
 use style::{register_font, PALETTE};
 
 /// A picture that could not be drawn or written.
@@ -27,7 +27,7 @@ pub struct PlotError {
 
 /// Per-frame joint-position error of `decoded` against `original` (same
 /// skeleton), millimetres: `(rms over joints, max over joints)` per frame.
-/// The mean of the first components is the ARMS of [`crate::metrics::compare`].
+/// The mean of the first components is the ARMS of [`mocap_encoder::metrics::compare`].
 pub fn per_frame_errors(
     original: &Motion,
     decoded: &Motion,
