@@ -110,3 +110,19 @@ pub fn describe_section(
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codec_names_parse_back() {
+        for c in CodecChoice::ALL {
+            assert_eq!(c.name().parse::<CodecChoice>(), Ok(c));
+        }
+        assert_eq!(
+            "pca".parse::<CodecChoice>().unwrap_err().to_string(),
+            "unknown codec 'pca' (index, pca-spline, predictive, auto)"
+        );
+    }
+}

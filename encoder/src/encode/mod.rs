@@ -107,8 +107,17 @@ pub enum EncodeError {
         channel: usize,
     },
     /// `auto`: every codec failed (each codec and its error).
-    #[error("{}", .0.iter().map(|(c, e)| format!("{}: {e}", c.name())).collect::<Vec<_>>().join("; "))]
+    #[error("{}", joined(.0))]
     EveryCodecFailed(Vec<(CodecChoice, EncodeError)>),
+}
+
+/// `index: …; pca-spline: …` — each codec's error.
+fn joined(errors: &[(CodecChoice, EncodeError)]) -> String {
+    let each: Vec<String> = errors
+        .iter()
+        .map(|(c, e)| format!("{}: {e}", c.name()))
+        .collect();
+    each.join("; ")
 }
 
 /// Encodes `m`, proving the bound by decoding; errors say why it cannot.
