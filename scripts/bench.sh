@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 corpus="${MOCAP_CORPUS:-../shared/data}"
 source scripts/toolchain.sh
 mocap_toolchain_setup >&2
-cargo build --release -q -p mocap-encoder
+cargo build --release -q -p mocap-cli
 mocap=target/release/mocap
 out=target/bench
 mkdir -p "$out"

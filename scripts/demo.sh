@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 source scripts/toolchain.sh
 mocap_toolchain_setup >&2
 
-cargo build --release -q -p mocap-encoder
+cargo build --release -q -p mocap-cli
 mocap=target/release/mocap
 out=target/demo
 mkdir -p "$out"

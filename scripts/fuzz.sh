@@ -10,7 +10,7 @@ secs="${1:-120}"
 seeds=decoder-nostd/fuzz/corpus/parse_and_play
 mkdir -p "$seeds"
 cp firmware-example/clips/demo.mcb "$seeds/demo.mcb"
-cargo build --release -q -p mocap-encoder
+cargo build --release -q -p mocap-cli
 corpus="${MOCAP_CORPUS:-../shared/data}"
 for f in "$corpus"/cmu/35_17.bvh "$corpus"/cmu/09_01.bvh; do
     [ -f "$f" ] || continue

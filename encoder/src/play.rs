@@ -13,7 +13,7 @@ use crate::rig::{Rig, Servo, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
 
 /// Serial servo-controller protocol.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Protocol {
     /// Pololu Maestro compact protocol: Set Target `0x84 ch low7 high7`
     /// in quarter-microseconds.

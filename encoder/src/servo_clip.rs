@@ -312,7 +312,7 @@ pub fn tick_error(clip: &Clip<'_>, ticks: &TickTracks) -> Result<TickError, Stri
 }
 
 /// At which rate a servo clip codes its signals.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ServoRate {
     /// One frame per servo tick of the rig (`rate_hz`), the only times the
     /// firmware and `mocap play` sample a servo clip.
@@ -322,7 +322,7 @@ pub enum ServoRate {
 }
 
 /// What a servo clip keeps of the servo names.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ServoNames {
     /// No names: servos are channels `0..S` (players never read names).
     Strip,
@@ -401,7 +401,8 @@ pub fn encode_servo_clip(
                 metres_per_unit: 1e-3,
                 key_interval: opts.key_interval,
             },
-        )?;
+        )
+        .map_err(|e| e.to_string())?;
         let bytes = attach_rig(&enc.bytes, rig, opts.names)?;
         let clip = Clip::parse(&bytes).map_err(|e| e.to_string())?;
         let tick = tick_error(&clip, &ticks)?;
@@ -471,7 +472,7 @@ pub fn report(output: &std::path::Path, rig: &Rig, tracks: &ServoTracks, sc: &Se
         raw_rig,
         sc.frame_rate_hz,
         sc.frames,
-        crate::bench::codec_name(sc.codec),
+        sc.codec.name(),
     );
     s.push_str(&format!(
         "  servo angle max {:.3}° at the coded frames, {:.3}° at the {} rig ticks (pulse error max {:.2} µs, RMS {:.2} µs)",

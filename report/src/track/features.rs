@@ -4,7 +4,7 @@
 //! translation is dropped and its heading (the twist about the vertical Y
 //! axis, BVH's up axis) is removed, so only its tilt remains.
 
-use crate::motion::Motion;
+use mocap_encoder::motion::Motion;
 
 /// A quaternion `(w, x, y, z)`.
 pub type Quat = [f64; 4];
@@ -77,7 +77,7 @@ impl QuatFrames {
 
 /// Quaternion frames of `m` over the joints named in `joints` (in that
 /// order; see [`rotating_joints`]). A joint missing from `m` is an error.
-pub fn quat_frames(m: &Motion, joints: &[String]) -> Result<QuatFrames, String> {
+pub fn quat_frames(m: &Motion, joints: &[String]) -> Result<QuatFrames, super::TrackError> {
     // (first channel index, kinds) per selected joint.
     let mut first = Vec::with_capacity(m.skeleton.joints.len());
     let mut k = 0;
@@ -93,7 +93,7 @@ pub fn quat_frames(m: &Motion, joints: &[String]) -> Result<QuatFrames, String> 
             .iter()
             .enumerate()
             .find(|(_, j)| &j.name == name)
-            .ok_or_else(|| format!("joint {name} is missing"))?;
+            .ok_or_else(|| super::TrackError::MissingJoint(name.clone()))?;
         sel.push((first[idx], &joint.channels, joint.parent.is_none()));
     }
     let dim = 4 * sel.len();

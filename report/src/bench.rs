@@ -3,11 +3,15 @@
 //! (total f32 bytes / total clip bytes). Figures, never assertions.
 
 use std::path::{Path, PathBuf};
+
 use std::time::Instant;
 
-use crate::bvh;
-use crate::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
-use crate::units;
+use mocap_encoder::bvh;
+use mocap_encoder::bvh::BvhError;
+use mocap_encoder::encode::{
+    self, Bound, BoundError, BoundSpec, CodecChoice, EncodeError, EncodeOptions,
+};
+use mocap_encoder::units;
 
 /// One row of the table.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -27,30 +31,34 @@ pub struct Row {
     /// Input file size.
     pub file_bytes: usize,
     /// Metrics of the encoded clip.
-    pub metrics: crate::metrics::Metrics,
+    pub metrics: mocap_encoder::metrics::Metrics,
     /// Key interval chosen.
     pub key_interval: u16,
     /// Wall-clock seconds of the encode (search included).
     pub encode_seconds: f64,
 }
 
-/// Expands folders into their `.bvh` files (sorted); files pass through.
-pub fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
-    let mut out = Vec::new();
-    for p in paths {
-        if p.is_dir() {
-            let mut files: Vec<PathBuf> = std::fs::read_dir(p)
-                .map_err(|e| format!("{}: {e}", p.display()))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|f| f.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
-                .collect();
-            files.sort();
-            out.extend(files);
-        } else {
-            out.push(p.clone());
-        }
-    }
-    Ok(out)
+/// Why the bench stopped.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum BenchError {
+    /// A `--max-error` value does not parse.
+    #[error(transparent)]
+    Bound(#[from] BoundError),
+    /// A folder cannot be listed.
+    #[error(transparent)]
+    Folder(#[from] std::io::Error),
+    /// A file is not BVH.
+    #[error(transparent)]
+    Bvh(#[from] BvhError),
+    /// A file cannot be encoded at a bound.
+    #[error("{}: {source}", file.display())]
+    Encode {
+        /// The file.
+        file: PathBuf,
+        /// Why.
+        source: EncodeError,
+    },
 }
 
 fn group_of(p: &Path) -> String {
@@ -67,7 +75,7 @@ pub fn run(
     paths: &[PathBuf],
     codecs: &[CodecChoice],
     bounds: &[String],
-) -> Result<Vec<Row>, String> {
+) -> Result<Vec<Row>, BenchError> {
     let specs = bounds
         .iter()
         .map(|b| {
@@ -77,10 +85,10 @@ pub fn run(
                 .map(|v| Bound::from_specs(&v))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let files = expand(paths)?;
+    let files = bvh::expand(paths)?;
     let mut rows = Vec::new();
     for file in &files {
-        let m = bvh::read_file(file).map_err(|e| e.to_string())?;
+        let m = bvh::read_file(file)?;
         let unit = units::detect(&m);
         let file_bytes = std::fs::metadata(file)
             .map(|md| md.len() as usize)
@@ -96,13 +104,16 @@ pub fn run(
                 key_interval: None,
             };
             let t = Instant::now();
-            let enc = encode::encode(&m, &opts).map_err(|e| format!("{}: {e}", file.display()))?;
+            let enc = encode::encode(&m, &opts).map_err(|source| BenchError::Encode {
+                file: file.clone(),
+                source,
+            })?;
             let mut metrics = enc.metrics;
             metrics.ratio_file = file_bytes as f64 / enc.bytes.len() as f64;
             eprintln!(
                 "  {} {} @ {name}: {} bytes, ratio {:.1}",
                 file.display(),
-                codec_name(codec),
+                codec.name(),
                 enc.bytes.len(),
                 metrics.ratio_f32
             );
@@ -113,8 +124,8 @@ pub fn run(
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default(),
                 bound: name.clone(),
-                codec: codec_name(codec).into(),
-                chosen: codec_name(enc.codec).into(),
+                codec: codec.name().into(),
+                chosen: enc.codec.name().into(),
                 f32_bytes: m.frames() * m.channels() * 4,
                 file_bytes,
                 metrics,
@@ -124,16 +135,6 @@ pub fn run(
         }
     }
     Ok(rows)
-}
-
-/// The command-line name of a codec.
-pub fn codec_name(c: CodecChoice) -> &'static str {
-    match c {
-        CodecChoice::Index => "index",
-        CodecChoice::PcaSpline => "pca-spline",
-        CodecChoice::Predictive => "predictive",
-        CodecChoice::Auto => "auto",
-    }
 }
 
 /// The table as Markdown, with per-folder totals per codec and bound.

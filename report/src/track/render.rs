@@ -17,36 +17,14 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::Track;
+use crate::plot::style::register_font;
+use crate::plot::PlotError;
 
 /// Fill of the key-frame markers.
 pub const KEY_COLOUR: RGBColor = RGBColor(0x80, 0x80, 0x80);
 /// Background.
 pub const BACKGROUND: RGBColor = RGBColor(0x14, 0x14, 0x18);
-/// Clip colours (Tableau 10), in legend order; clip i uses `PALETTE[i % 10]`.
-pub const PALETTE: [RGBColor; 10] = [
-    RGBColor(0x1f, 0x77, 0xb4),
-    RGBColor(0xff, 0x7f, 0x0e),
-    RGBColor(0x2c, 0xa0, 0x2c),
-    RGBColor(0xd6, 0x27, 0x28),
-    RGBColor(0x94, 0x67, 0xbd),
-    RGBColor(0x8c, 0x56, 0x4b),
-    RGBColor(0xe3, 0x77, 0xc2),
-    RGBColor(0xbc, 0xbd, 0x22),
-    RGBColor(0x17, 0xbe, 0xcf),
-    RGBColor(0x7f, 0x7f, 0x7f),
-];
-
-/// Registers the bundled font (Ubuntu Light) as "sans-serif" (idempotent).
-pub fn register_font() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            epaint_default_fonts::UBUNTU_LIGHT,
-        );
-    });
-}
+pub use crate::plot::style::PALETTE;
 
 /// Writes the picture to `path` (`.svg`, else PNG); the view spans the key
 /// frames and the tracks.
@@ -55,7 +33,7 @@ pub fn render(
     title: &str,
     tracks: &[Track],
     key_xy: &[[f64; 2]],
-) -> Result<(), String> {
+) -> Result<(), PlotError> {
     render_view(path, title, tracks, key_xy, false)
 }
 
@@ -67,7 +45,7 @@ pub fn render_view(
     tracks: &[Track],
     key_xy: &[[f64; 2]],
     zoom: bool,
-) -> Result<(), String> {
+) -> Result<(), PlotError> {
     register_font();
     let size = (1300u32, 1000u32);
     let svg = path
@@ -92,7 +70,10 @@ pub fn render_view(
             Stroke::Segments,
         )
     };
-    r.map_err(|e| format!("{}: {e}", path.display()))
+    r.map_err(|message| PlotError {
+        path: path.to_path_buf(),
+        message,
+    })
 }
 
 fn lerp(a: RGBColor, b: RGBColor, t: f64) -> RGBColor {

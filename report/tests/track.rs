@@ -2,10 +2,10 @@
 //! corpus check is tests/tests/corpus_track.rs).
 
 use mocap_encoder::motion::{ChannelKind::*, Joint, Motion, Skeleton};
-use mocap_encoder::track::features::{self, quat_frames, rotating_joints};
-use mocap_encoder::track::idw::{self, Scheme};
-use mocap_encoder::track::som::{self, SomConfig, SplitMix64};
-use mocap_encoder::track::{build_reference, lle, render, Track, TrackOptions};
+use mocap_report::track::features::{self, quat_frames, rotating_joints};
+use mocap_report::track::idw::{self, Scheme};
+use mocap_report::track::som::{self, SomConfig, SplitMix64};
+use mocap_report::track::{build_reference, lle, render, Track, TrackOptions};
 
 fn gauss(rng: &mut SplitMix64) -> f64 {
     // Box–Muller.

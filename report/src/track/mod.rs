@@ -23,10 +23,72 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::motion::Motion;
+use crate::plot::PlotError;
 use features::QuatFrames;
 use idw::Scheme;
+use mocap_encoder::bvh::BvhError;
+use mocap_encoder::motion::Motion;
 use som::SomConfig;
+
+/// Why a Motion Track picture could not be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TrackError {
+    /// A clip cannot be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A folder cannot be listed (the error names it).
+    #[error(transparent)]
+    Folder(std::io::Error),
+    /// A `.mcb` clip does not parse or decode.
+    #[error("{}: {source}", path.display())]
+    Clip {
+        /// The clip.
+        path: PathBuf,
+        /// Why.
+        source: mocap_decoder::Error,
+    },
+    /// A BVH file does not parse (the error names the file).
+    #[error(transparent)]
+    Bvh(#[from] BvhError),
+    /// No clips to draw.
+    #[error("no clips")]
+    NoClips,
+    /// The clips have no rotating joint in common.
+    #[error("the clips share no rotating joint")]
+    NoSharedJoint,
+    /// A clip lacks a joint of the reference set.
+    #[error("joint {0} is missing")]
+    MissingJoint(String),
+    /// No frames to train the SOM on.
+    #[error("no reference frames")]
+    NoReferenceFrames,
+    /// The reference clips' frames have different lengths.
+    #[error("reference clips differ in joints")]
+    ReferenceJointsDiffer,
+    /// Fewer than four reference frames.
+    #[error("{0} reference frames are too few")]
+    TooFewReferenceFrames(usize),
+    /// Too few key frames for the embedding.
+    #[error("LLE needs at least {needed} points, got {got}")]
+    TooFewKeyFrames {
+        /// Points needed.
+        needed: usize,
+        /// Points given.
+        got: usize,
+    },
+    /// A local Gram matrix of the LLE is singular.
+    #[error("LLE: singular local Gram matrix")]
+    SingularGram,
+    /// The picture cannot be drawn or written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
 
 /// The paper's k for its mixed-type database (§4.1); its walking-only
 /// database used 22.
@@ -130,18 +192,21 @@ impl ReferenceSpace {
 pub fn build_reference(
     train: &[&QuatFrames],
     opts: &TrackOptions,
-) -> Result<ReferenceSpace, String> {
-    let dim = train.first().map(|q| q.dim).ok_or("no reference frames")?;
+) -> Result<ReferenceSpace, TrackError> {
+    let dim = train
+        .first()
+        .map(|q| q.dim)
+        .ok_or(TrackError::NoReferenceFrames)?;
     let mut data = Vec::new();
     for q in train {
         if q.dim != dim {
-            return Err("reference clips differ in joints".into());
+            return Err(TrackError::ReferenceJointsDiffer);
         }
         data.extend_from_slice(&q.data);
     }
     let frames = data.len() / dim.max(1);
     if frames < 4 {
-        return Err(format!("{frames} reference frames are too few"));
+        return Err(TrackError::TooFewReferenceFrames(frames));
     }
     let t = Instant::now();
     let map = som::train(&data, dim, &opts.som);
@@ -271,18 +336,23 @@ pub fn separation_markdown(tracks: &[Track]) -> String {
 }
 
 /// Reads a BVH file, or decodes a `.mcb` clip with the `no_std` decoder.
-pub fn load(path: &Path) -> Result<Motion, String> {
+pub fn load(path: &Path) -> Result<Motion, TrackError> {
     let is_mcb = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcb"));
-    if is_mcb {
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let clip =
-            mocap_decoder::Clip::parse(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-        crate::clipfile::to_motion(&clip).map_err(|e| format!("{}: {e}", path.display()))
-    } else {
-        crate::bvh::read_file(path).map_err(|e| format!("{}: {e}", path.display()))
+    if !is_mcb {
+        return Ok(mocap_encoder::bvh::read_file(path)?);
     }
+    let bytes = std::fs::read(path).map_err(|source| TrackError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let clip_error = |source| TrackError::Clip {
+        path: path.to_path_buf(),
+        source,
+    };
+    let clip = mocap_decoder::Clip::parse(&bytes).map_err(clip_error)?;
+    mocap_encoder::clipfile::to_motion(&clip).map_err(clip_error)
 }
 
 /// Legend name of a file: its stem, with "(decoded)" for a `.mcb`.
@@ -301,84 +371,67 @@ pub fn clip_name(path: &Path) -> String {
     }
 }
 
-fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
-    let mut out = Vec::new();
-    for p in paths {
-        if p.is_dir() {
-            out.extend(crate::bench::expand(std::slice::from_ref(p))?);
-        } else {
-            out.push(p.clone());
-        }
-    }
-    Ok(out)
-}
-
-/// Arguments of `mocap track`.
-#[derive(clap::Args, Debug)]
-pub struct TrackArgs {
-    /// Clips to draw: BVH files (or folders of them) and `.mcb` clips (drawn
-    /// decoded, e.g. beside their source BVH).
-    #[arg(required = true)]
+/// What `mocap track` draws: clips (BVH files, folders of them, `.mcb`
+/// clips drawn decoded), the optional reference set, the settings and the
+/// picture.
+#[derive(Clone, Debug)]
+pub struct TrackJob {
+    /// Clips to draw.
     pub clips: Vec<PathBuf>,
-    /// Output picture: `.svg` or `.png`.
-    #[arg(short, long)]
-    pub output: PathBuf,
     /// Train the SOM on these BVH files or folders instead of the clips.
-    #[arg(long)]
     pub reference: Vec<PathBuf>,
-    /// SOM grid side (nodes = side²).
-    #[arg(long, default_value_t = 16)]
-    pub som: usize,
-    /// SOM batch epochs.
-    #[arg(long, default_value_t = 30)]
-    pub epochs: usize,
-    /// Seed of the SOM initialisation.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// LLE neighbours (the paper uses 22–27).
-    #[arg(long, default_value_t = DEFAULT_K)]
-    pub k: usize,
-    /// Inverse-distance weighting: eq2, eq3 or eq4 (Gaussian).
-    #[arg(long, default_value = "eq4")]
-    pub weights: Scheme,
-    /// Power p of the weighting (default: 8 for eq2, 2 for eq3/eq4).
-    #[arg(long)]
-    pub p: Option<f64>,
-    /// Place each frame by its N nearest key frames (0 = all, as the paper
-    /// writes it; over all key frames eq. 4 pulls every frame to the
-    /// key frames' centroid, see docs/TRACK.md).
-    #[arg(long, default_value_t = DEFAULT_NEIGHBOURS)]
-    pub neighbours: usize,
-    /// Keep the SOM nodes as key frames instead of snapping them to real frames.
-    #[arg(long)]
-    pub no_snap: bool,
-    /// Print timings, frame counts and the separation table.
-    #[arg(long)]
-    pub stats: bool,
-    /// Fit the view to the tracks rather than to all key frames.
-    #[arg(long)]
-    pub zoom: bool,
-    /// Picture title.
-    #[arg(long)]
+    /// Reference space and placement settings.
+    pub opts: TrackOptions,
+    /// Output picture: `.svg` or `.png`.
+    pub output: PathBuf,
+    /// Picture title (default: the settings).
     pub title: Option<String>,
+    /// Fit the view to the tracks rather than to all key frames.
+    pub zoom: bool,
 }
 
-/// `mocap track`.
-pub fn run(args: &TrackArgs) -> Result<(), String> {
+/// What [`draw`] made and measured.
+#[derive(Clone, Debug)]
+pub struct TrackReport {
+    /// The reference space.
+    pub space: ReferenceSpace,
+    /// One track per clip.
+    pub tracks: Vec<Track>,
+    /// Joints compared.
+    pub joints: usize,
+    /// Clips the SOM was trained on.
+    pub train_clips: usize,
+    /// Seconds reading the clips and computing their features.
+    pub load_seconds: f64,
+    /// Seconds placing the frames.
+    pub place_seconds: f64,
+    /// Seconds drawing the picture.
+    pub render_seconds: f64,
+    /// Threads the SOM, the LLE and the placement ran on.
+    pub threads: usize,
+}
+
+fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>, TrackError> {
+    mocap_encoder::bvh::expand(paths).map_err(TrackError::Folder)
+}
+
+/// `mocap track`: reads the clips, builds the reference space, places every
+/// clip's frames and writes the picture.
+pub fn draw(job: &TrackJob) -> Result<TrackReport, TrackError> {
     let t0 = Instant::now();
-    let files = expand(&args.clips)?;
+    let files = expand(&job.clips)?;
     let motions: Vec<Motion> = files
         .par_iter()
         .map(|f| load(f))
         .collect::<Result<_, _>>()?;
-    let ref_files = expand(&args.reference)?;
+    let ref_files = expand(&job.reference)?;
     let ref_motions: Vec<Motion> = ref_files
         .par_iter()
         .map(|f| load(f))
         .collect::<Result<_, _>>()?;
     // Joints: the first clip's rotating joints present in every clip.
     let all: Vec<&Motion> = motions.iter().chain(&ref_motions).collect();
-    let first = all.first().ok_or("no clips")?;
+    let first = all.first().ok_or(TrackError::NoClips)?;
     let joints: Vec<String> = features::rotating_joints(first)
         .into_iter()
         .filter(|n| {
@@ -387,7 +440,7 @@ pub fn run(args: &TrackArgs) -> Result<(), String> {
         })
         .collect();
     if joints.is_empty() {
-        return Err("the clips share no rotating joint".into());
+        return Err(TrackError::NoSharedJoint);
     }
     let q: Vec<QuatFrames> = motions
         .par_iter()
@@ -398,30 +451,13 @@ pub fn run(args: &TrackArgs) -> Result<(), String> {
         .map(|m| features::quat_frames(m, &joints))
         .collect::<Result<_, _>>()?;
     let load_seconds = t0.elapsed().as_secs_f64();
-    let opts = TrackOptions {
-        som: SomConfig {
-            width: args.som,
-            height: args.som,
-            epochs: args.epochs,
-            seed: args.seed,
-            ..SomConfig::default()
-        },
-        k: args.k,
-        snap: !args.no_snap,
-        scheme: args.weights,
-        p: args.p.unwrap_or(args.weights.default_p()),
-        neighbours: if args.neighbours == 0 {
-            None
-        } else {
-            Some(args.neighbours)
-        },
-    };
+    let opts = &job.opts;
     let train: Vec<&QuatFrames> = if qr.is_empty() {
         q.iter().collect()
     } else {
         qr.iter().collect()
     };
-    let space = build_reference(&train, &opts)?;
+    let space = build_reference(&train, opts)?;
     let t = Instant::now();
     let tracks: Vec<Track> = files
         .iter()
@@ -433,10 +469,10 @@ pub fn run(args: &TrackArgs) -> Result<(), String> {
         })
         .collect();
     let place_seconds = t.elapsed().as_secs_f64();
-    let title = args.title.clone().unwrap_or_else(|| {
+    let title = job.title.clone().unwrap_or_else(|| {
         format!(
             "Motion Track: SOM {0}×{0}, {1} key frames, LLE k={2}, IDW {3} p={4}, {5} nearest",
-            args.som,
+            opts.som.width,
             space.key_count(),
             opts.k,
             opts.scheme,
@@ -445,33 +481,16 @@ pub fn run(args: &TrackArgs) -> Result<(), String> {
         )
     });
     let t = Instant::now();
-    render::render_view(&args.output, &title, &tracks, &space.key_xy, args.zoom)?;
+    render::render_view(&job.output, &title, &tracks, &space.key_xy, job.zoom)?;
     let render_seconds = t.elapsed().as_secs_f64();
-    eprintln!("wrote {}", args.output.display());
-    if args.stats {
-        println!(
-            "reference: {} frames × {} values ({} joints) from {} clips; SOM {}×{} {} epochs: {:.2} s (quantisation error {:.4}); {} key frames; LLE k={}: {:.2} s; SOM+LLE {:.2} s on {} threads",
-            space.train_frames,
-            space.dim,
-            joints.len(),
-            train.len(),
-            args.som,
-            args.som,
-            opts.som.epochs,
-            space.som_seconds,
-            space.quantisation_error,
-            space.key_count(),
-            opts.k,
-            space.lle_seconds,
-            space.som_seconds + space.lle_seconds,
-            rayon::current_num_threads()
-        );
-        println!(
-            "read+features {load_seconds:.2} s, placement ({} frames, {}) {place_seconds:.2} s, render {render_seconds:.2} s\n",
-            tracks.iter().map(|t| t.xy.len()).sum::<usize>(),
-            opts.scheme
-        );
-        print!("{}", separation_markdown(&tracks));
-    }
-    Ok(())
+    Ok(TrackReport {
+        space,
+        tracks,
+        joints: joints.len(),
+        train_clips: train.len(),
+        load_seconds,
+        place_seconds,
+        render_seconds,
+        threads: rayon::current_num_threads(),
+    })
 }

@@ -35,14 +35,19 @@ impl Scheme {
     }
 }
 
+/// A `--weights` name that is not a scheme.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown weighting {0:?} (eq2, eq3, eq4)")]
+pub struct UnknownScheme(pub String);
+
 impl FromStr for Scheme {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownScheme;
+    fn from_str(s: &str) -> Result<Self, UnknownScheme> {
         match s.to_ascii_lowercase().as_str() {
             "eq2" | "2" => Ok(Scheme::Eq2),
             "eq3" | "3" => Ok(Scheme::Eq3),
             "eq4" | "4" | "gauss" | "gaussian" => Ok(Scheme::Eq4),
-            _ => Err(format!("unknown weighting {s:?} (eq2, eq3, eq4)")),
+            _ => Err(UnknownScheme(s.to_string())),
         }
     }
 }

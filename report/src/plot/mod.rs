@@ -1,21 +1,33 @@
 //! Plots users want beside the tables: the rate–distortion plot of
 //! `mocap bench --plot` and the per-frame error plot of `mocap eval --plot`.
 //! plotters, SVG or PNG by the file's extension; text uses the font bundled
-//! by [`crate::track::render::register_font`] (no system font library).
+//! by [`style::register_font`] (no system font library).
 
-use std::path::Path;
+pub mod style;
+
+use std::path::{Path, PathBuf};
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::bench::Row;
-use crate::metrics::positions_mm;
-use crate::motion::Motion;
-use crate::track::render::{register_font, PALETTE};
+use mocap_encoder::metrics::positions_mm;
+use mocap_encoder::motion::Motion;
+use style::{register_font, PALETTE};
+
+/// A picture that could not be drawn or written.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct PlotError {
+    /// The picture's file.
+    pub path: PathBuf,
+    /// What plotters reported.
+    pub message: String,
+}
 
 /// Per-frame joint-position error of `decoded` against `original` (same
 /// skeleton), millimetres: `(rms over joints, max over joints)` per frame.
-/// The mean of the first components is the ARMS of [`crate::metrics::compare`].
+/// The mean of the first components is the ARMS of [`mocap_encoder::metrics::compare`].
 pub fn per_frame_errors(
     original: &Motion,
     decoded: &Motion,
@@ -49,14 +61,17 @@ fn with_backend(
     size: (u32, u32),
     f: impl Fn(DrawingArea<SVGBackend, Shift>) -> Result<(), String>,
     g: impl Fn(DrawingArea<BitMapBackend, Shift>) -> Result<(), String>,
-) -> Result<(), String> {
+) -> Result<(), PlotError> {
     register_font();
     let r = if is_svg(path) {
         f(SVGBackend::new(path, size).into_drawing_area())
     } else {
         g(BitMapBackend::new(path, size).into_drawing_area())
     };
-    r.map_err(|e| format!("{}: {e}", path.display()))
+    r.map_err(|message| PlotError {
+        path: path.to_path_buf(),
+        message,
+    })
 }
 
 /// `mocap eval --plot`: RMS and max joint error per frame.
@@ -66,7 +81,7 @@ pub fn frame_error_plot(
     decoded: &Motion,
     metres_per_unit: f64,
     name: &str,
-) -> Result<(), String> {
+) -> Result<(), PlotError> {
     let errs = per_frame_errors(original, decoded, metres_per_unit);
     let dt = original.frame_time;
     let name = Path::new(name)
@@ -146,7 +161,7 @@ where
 /// `mocap bench --plot`: compression ratio (vs 32-bit floats) against ARMS,
 /// one colour per codec and bound, one point per file, and a grey line per
 /// file joining its bounds.
-pub fn rate_distortion_plot(path: &Path, rows: &[Row]) -> Result<(), String> {
+pub fn rate_distortion_plot(path: &Path, rows: &[Row]) -> Result<(), PlotError> {
     with_backend(
         path,
         (1000, 700),

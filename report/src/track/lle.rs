@@ -5,6 +5,8 @@
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
+use super::TrackError;
+
 /// Regularisation of the local Gram matrix, relative to its trace (needed
 /// when k exceeds the data's local dimension).
 pub const REGULARISATION: f64 = 1e-3;
@@ -13,13 +15,13 @@ pub const REGULARISATION: f64 = 1e-3;
 /// dimensions using `k` neighbours (clamped to `n − 1`). Returns row-major
 /// `n × out_dim` coordinates, scaled so each coordinate has unit variance;
 /// each axis's sign is fixed so its largest-magnitude entry is positive.
-pub fn embed(points: &[f64], dim: usize, k: usize, out_dim: usize) -> Result<Vec<f64>, String> {
+pub fn embed(points: &[f64], dim: usize, k: usize, out_dim: usize) -> Result<Vec<f64>, TrackError> {
     let n = points.len() / dim.max(1);
     if n < out_dim + 2 {
-        return Err(format!(
-            "LLE needs at least {} points, got {n}",
-            out_dim + 2
-        ));
+        return Err(TrackError::TooFewKeyFrames {
+            needed: out_dim + 2,
+            got: n,
+        });
     }
     let k = k.clamp(1, n - 1);
     let row = |i: usize| &points[i * dim..(i + 1) * dim];
@@ -65,7 +67,7 @@ pub fn embed(points: &[f64], dim: usize, k: usize, out_dim: usize) -> Result<Vec
             .cholesky()
             .map(|ch| ch.solve(&ones))
             .or_else(|| c.lu().solve(&ones))
-            .ok_or("LLE: singular local Gram matrix")?;
+            .ok_or(TrackError::SingularGram)?;
         let sum = sol.sum();
         for (a, &j) in nb.iter().enumerate() {
             w[(i, j)] = sol[a] / sum;
