@@ -13,7 +13,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
 cd "$MOCAP_REPO_ROOT"
 corpus="${MOCAP_CORPUS:-../shared/data}"
 mocap_toolchain_setup >&2
-cargo build --release -q -p mocap-encoder
+cargo build --release -q -p mocap-cli
 mocap=target/release/mocap
 out=target/bench
 mkdir -p "$out"

@@ -10,7 +10,7 @@ cd "$MOCAP_REPO_ROOT"
 mocap_explain_failure demo.sh
 mocap_toolchain_setup >&2
 
-cargo build --release -q -p mocap-encoder
+cargo build --release -q -p mocap-cli
 mocap=target/release/mocap
 out=target/demo
 mkdir -p "$out"

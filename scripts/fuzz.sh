@@ -48,7 +48,7 @@ mocap_explain_failure fuzz.sh "$log"
 seeds=decoder-nostd/fuzz/corpus/parse_and_play
 mkdir -p "$seeds"
 cp firmware-example/clips/demo.mcb "$seeds/demo.mcb"
-mocap_logged "$log" cargo build --release -q -p mocap-encoder
+mocap_logged "$log" cargo build --release -q -p mocap-cli
 mocap=target/release/mocap
 encode() { mocap_logged "$log" "$mocap" encode "$@"; }
 corpus="${MOCAP_CORPUS:-../shared/data}"

@@ -1,7 +1,14 @@
-//! The `mocap` encoder: read motion, encode it into `.mcb` bitstreams,
-//! decode and evaluate them with the same `no_std` decoder the MCU runs.
+//! The `mocap` encoder library: read motion, encode it into `.mcb`
+//! bitstreams, decode and evaluate them with the same `no_std` decoder the
+//! MCU runs. The `mocap` command line is the `mocap-cli` crate; nothing here
+//! parses arguments or prints errors — every area returns its typed error.
+//!
+//! Motion in and out: [`bvh`], [`motion`], [`units`], [`kinematics`],
+//! [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
+//! [`clipfile`], [`metrics`]. Servos: [`rig`], [`servo_clip`], [`play`].
+//! The reports over them (bench, plots, Motion Track) are the
+//! `mocap-report` crate.
 
-pub mod bench;
 pub mod bvh;
 pub mod clipfile;
 pub mod codec;
@@ -13,8 +20,6 @@ pub mod kinematics;
 pub mod metrics;
 pub mod motion;
 pub mod play;
-pub mod plot;
 pub mod rig;
 pub mod servo_clip;
-pub mod track;
 pub mod units;

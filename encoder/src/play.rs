@@ -6,13 +6,14 @@
 
 use mocap_decoder::{tick_count, tick_us, Clip, RigServo};
 use mocap_servo::output::{MaestroOutput, ServoOutput, Ssc32Output};
-use mocap_servo::{stream, Limiter, Message, ServoLimits};
+use mocap_servo::record::{RecordError, SerialRecorder};
+use mocap_servo::{ssc32, stream, Message, OutputError, Playback, ServoLimits};
 
-use crate::rig::{Rig, ServoTracks};
+use crate::rig::{Rig, Servo, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
 
 /// Serial servo-controller protocol.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Protocol {
     /// Pololu Maestro compact protocol: Set Target `0x84 ch low7 high7`
     /// in quarter-microseconds.
@@ -23,8 +24,8 @@ pub enum Protocol {
 
 /// Most servos a rig may drive here.
 pub const MAX_SERVOS: usize = mocap_servo::output::MAX_SERVOS;
-/// Upper bound on the ticks of the return to neutral.
-const MAX_STOP_TICKS: usize = 100_000;
+/// Serial bytes of one tick (SSC-32 text is the longer).
+const TICK_BYTES: usize = ssc32::group_move_max_len(MAX_SERVOS);
 
 /// A played clip: the bytes to send at each servo tick and what was sent.
 #[derive(Clone, Debug)]
@@ -137,19 +138,20 @@ pub fn servo_stream(
     let frame_time = 1000.0 / f64::from(rate_mhz);
     let motion = fixed::from_fixed(&skeleton, frame_time, &samples, metres_per_unit);
     let tracks = rig.servo_tracks(&motion, &channels, metres_per_unit);
-    let servos: Vec<RigServo> = rig.servos.iter().map(servo_clip::table_entry).collect();
+    let servos: Vec<RigServo> = rig.servos.iter().map(Servo::rig_servo).collect();
     let targets: Vec<Vec<u16>> = (0..count)
         .map(|i| tracks.servos.iter().map(|t| t.pulses[i]).collect())
         .collect();
     drive(targets, &servos, rate_mhz, protocol, Some(tracks))
 }
 
-/// Holds every tick's targets to the servos' pulse range and speed with
-/// [`Limiter`] — whatever they are, no pulse leaves its range or moves
-/// faster than its speed limit — encodes them, and returns every servo to
-/// neutral at its speed limit. The limiter starts at neutral (the servos'
-/// real position at power-on is unknown): the first ticks move towards the
-/// clip's first pose at the speed limit.
+/// Plays every tick's targets on `mocap_servo::Playback`, the firmware's
+/// own playback loop: held to the servos' pulse range and speed — whatever
+/// they are, no pulse leaves its range or moves faster than its speed limit
+/// — encoded by the `mocap_servo::output` the firmware drives, then every
+/// servo returned to neutral at its speed limit. The playback starts at
+/// neutral (the servos' real position at power-on is unknown): the first
+/// ticks move towards the clip's first pose at the speed limit.
 fn drive(
     targets: impl IntoIterator<Item = Vec<u16>>,
     servos: &[RigServo],
@@ -157,73 +159,68 @@ fn drive(
     protocol: Protocol,
     tracks: Option<ServoTracks>,
 ) -> Result<ServoStream, String> {
-    let n_servos = servos.len();
-    if n_servos > MAX_SERVOS {
-        return Err(format!("{n_servos} servos, at most {MAX_SERVOS}"));
-    }
-    let limits: Vec<ServoLimits> = servos
-        .iter()
-        .map(|s| {
-            let (lo, hi) = s.pulse_range_qus();
-            ServoLimits::new(lo, hi, s.neutral_qus, s.max_step_qus(rate_mhz))
-                .map_err(|e| format!("servo output {}: {e}", s.output))
-        })
-        .collect::<Result<_, _>>()?;
-    let idle = ServoLimits::new(6000, 6000, 6000, 0).map_err(|e| e.to_string())?;
-    let mut all = [idle; MAX_SERVOS];
-    all[..n_servos].copy_from_slice(&limits);
-    let mut limiter = Limiter::new(all).map_err(|e| e.to_string())?;
+    let mut playback =
+        Playback::<MAX_SERVOS>::new(servos.iter().copied(), rate_mhz).map_err(|e| e.to_string())?;
+    let limits = playback.limits().to_vec();
     let rate_hz = f64::from(rate_mhz) / 1000.0;
     let time_ms = (1000.0 / rate_hz).round().clamp(1.0, f64::from(u16::MAX)) as u16;
     let outputs: Vec<u16> = servos.iter().map(|s| s.output).collect();
-    let encode = |pulses: &[u16]| command(protocol, &outputs, pulses, time_ms);
-    let (mut ticks, mut sent) = (Vec::new(), Vec::new());
-    let mut want = [6000u16; MAX_SERVOS];
-    let mut held = [6000u16; MAX_SERVOS];
-    for t in targets {
-        want[..n_servos].copy_from_slice(&t[..n_servos]);
-        limiter.apply(&want, &mut held).map_err(|e| e.to_string())?;
-        ticks.push(encode(&held[..n_servos])?);
-        sent.push(held[..n_servos].to_vec());
-    }
-    let clip_ticks = ticks.len();
-    for _ in 0..MAX_STOP_TICKS {
-        let done = limiter.stop_step(&mut held).map_err(|e| e.to_string())?;
-        ticks.push(encode(&held[..n_servos])?);
-        sent.push(held[..n_servos].to_vec());
-        if done {
-            break;
+    let port = SerialRecorder::<TICK_BYTES>::new();
+    let played = match protocol {
+        Protocol::Maestro => {
+            let output =
+                MaestroOutput::new(&port, &outputs).map_err(|e| format!("maestro: {e}"))?;
+            play(&mut playback, output, &port, targets)
         }
-    }
+        Protocol::Ssc32 => {
+            let output =
+                Ssc32Output::new(&port, &outputs, time_ms).map_err(|e| format!("ssc32: {e}"))?;
+            play(&mut playback, output, &port, targets)
+        }
+    };
+    let (ticks, pulses, clip_ticks) = played.map_err(|e| e.to_string())?;
     Ok(ServoStream {
         rate_hz,
         ticks,
-        pulses: sent,
+        pulses,
         clip_ticks,
         tracks,
         limits,
     })
 }
 
-/// One tick's command bytes for `pulses` (¼ µs) on `outputs`, through the
-/// same `mocap_servo::output` code the firmware's playback loop drives.
-fn command(
-    protocol: Protocol,
-    outputs: &[u16],
-    pulses: &[u16],
-    time_ms: u16,
-) -> Result<Vec<u8>, String> {
-    let mut bytes = Vec::new();
-    let written = match protocol {
-        Protocol::Maestro => MaestroOutput::new(&mut bytes, outputs)
-            .map_err(|e| format!("maestro: {e}"))?
-            .write(pulses),
-        Protocol::Ssc32 => Ssc32Output::new(&mut bytes, outputs, time_ms)
-            .map_err(|e| format!("ssc32: {e}"))?
-            .write(pulses),
+/// Every tick's bytes and pulses, and the number of the clip's own ticks.
+type Played = (Vec<Vec<u8>>, Vec<Vec<u16>>, usize);
+
+/// [`drive`]'s loop on one output writing into `port`: a tick per target,
+/// then `Playback::park`; each tick's bytes are taken from `port`.
+fn play<O: ServoOutput<Error = RecordError>>(
+    playback: &mut Playback<MAX_SERVOS>,
+    mut output: O,
+    port: &SerialRecorder<TICK_BYTES>,
+    targets: impl IntoIterator<Item = Vec<u16>>,
+) -> Result<Played, OutputError<RecordError>> {
+    let (mut ticks, mut sent) = (Vec::new(), Vec::new());
+    let mut take = |pulses: &[u16]| -> Result<(), OutputError<RecordError>> {
+        ticks.push(
+            port.with_bytes(<[u8]>::to_vec)
+                .map_err(OutputError::Device)?,
+        );
+        port.clear();
+        sent.push(pulses.to_vec());
+        Ok(())
     };
-    written.map_err(|e| e.to_string())?;
-    Ok(bytes)
+    let n = playback.count();
+    let mut want = [0u16; MAX_SERVOS];
+    let mut clip_ticks = 0;
+    for t in targets {
+        want[..n].copy_from_slice(&t[..n]);
+        playback.tick(&want, &mut output)?;
+        take(playback.held())?;
+        clip_ticks += 1;
+    }
+    playback.park(&mut output, &mut take)?;
+    Ok((ticks, sent, clip_ticks))
 }
 
 /// One frame (delimiter included) of `message`.

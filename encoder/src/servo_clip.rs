@@ -52,21 +52,10 @@ fn signals_motion(rig: &Rig, angles: &[&[f64]], frame_time: f64) -> Motion {
 
 /// A rig servo as the rig table stores it (SPEC.md §3.5): integer
 /// millidegrees and quarter-microseconds, the form the decoder and the
-/// firmware map and limit with.
+/// firmware map and limit with: [`Servo::rig_servo`], the one conversion
+/// from the file's form.
 pub fn table_entry(s: &Servo) -> RigServo {
-    let mdeg = |v: f64| (v * 1000.0).round() as i32;
-    let qus = |us: f64| (us * 4.0).round().clamp(0.0, f64::from(u16::MAX)) as u16;
-    RigServo {
-        output: s.output,
-        angle_lo_mdeg: mdeg(s.angle[0]),
-        angle_hi_mdeg: mdeg(s.angle[1]),
-        pulse_lo_qus: qus(s.pulse[0]),
-        pulse_hi_qus: qus(s.pulse[1]),
-        neutral_qus: s.neutral_quarter_us(),
-        max_speed_mdeg_s: s.max_speed.map_or(0, |v| {
-            (v * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
-        }),
-    }
+    s.rig_servo()
 }
 
 /// The rig's servo rate in millihertz.
@@ -323,7 +312,7 @@ pub fn tick_error(clip: &Clip<'_>, ticks: &TickTracks) -> Result<TickError, Stri
 }
 
 /// At which rate a servo clip codes its signals.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ServoRate {
     /// One frame per servo tick of the rig (`rate_hz`), the only times the
     /// firmware and `mocap play` sample a servo clip.
@@ -333,7 +322,7 @@ pub enum ServoRate {
 }
 
 /// What a servo clip keeps of the servo names.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ServoNames {
     /// No names: servos are channels `0..S` (players never read names).
     Strip,
@@ -412,7 +401,8 @@ pub fn encode_servo_clip(
                 metres_per_unit: 1e-3,
                 key_interval: opts.key_interval,
             },
-        )?;
+        )
+        .map_err(|e| e.to_string())?;
         let bytes = attach_rig(&enc.bytes, rig, opts.names)?;
         let clip = Clip::parse(&bytes).map_err(|e| e.to_string())?;
         let tick = tick_error(&clip, &ticks)?;
@@ -482,7 +472,7 @@ pub fn report(output: &std::path::Path, rig: &Rig, tracks: &ServoTracks, sc: &Se
         raw_rig,
         sc.frame_rate_hz,
         sc.frames,
-        crate::bench::codec_name(sc.codec),
+        sc.codec.name(),
     );
     s.push_str(&format!(
         "  servo angle max {:.3}° at the coded frames, {:.3}° at the {} rig ticks (pulse error max {:.2} µs, RMS {:.2} µs)",

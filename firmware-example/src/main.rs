@@ -327,7 +327,7 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     if STREAM {
         // The embedded servo clip gives the rig (servos, limits, rate); the motion comes over
         // the UART.
-        let rig = servo::Rig::from_clip(&clip)?;
+        let rig = servo::rig_of(&clip)?;
         return servo::drive(rig, stream::Stream { calibration_ticks }, text);
     }
     if SERVO != 0 {

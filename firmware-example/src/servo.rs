@@ -1,5 +1,6 @@
-//! Servo playback: the rig of a servo clip (SPEC.md §3.5), its `Limiter`, and one playback
-//! loop that writes every tick's limited pulses through `mocap_servo::output::ServoOutput`,
+//! Servo playback: the rig of a servo clip (SPEC.md §3.5) in `mocap_servo::Playback`, the one
+//! playback loop of `mocap play` and this firmware (limits, speed, tick clock, return to
+//! neutral), which writes every tick's limited pulses through `mocap_servo::output::ServoOutput`,
 //! whichever output the build selects (`MOCAP_SERVO`):
 //!
 //! | `MOCAP_SERVO` | output | device in this build (QEMU) | line per tick |
@@ -19,11 +20,11 @@
 //! Modes: [`FlashClip`] plays the clip embedded in flash (`MOCAP_SERVO` alone); the streaming
 //! mode (`MOCAP_STREAM`, `src/stream.rs`) drives the same [`Driver`] from UART frames.
 
-use mocap_decoder::{tick_count, tick_us, Clip, Player, RigServo};
+use mocap_decoder::{Clip, Player};
 use mocap_servo::output::{MaestroOutput, Pca9685Output, PwmOutput, ServoOutput, Ssc32Output};
 use mocap_servo::pca9685::{self, Address, Pca9685Servos};
 use mocap_servo::record::{DutyRecorder, I2cRecorder, SerialRecorder};
-use mocap_servo::{ssc32, Limiter, OutputError, ServoBank, ServoLimits};
+use mocap_servo::{ssc32, OutputError, Playback, PlaybackError, ServoBank};
 
 use crate::config::SERVO;
 use crate::{decoder_glue, instructions, ticks, Failure, Out};
@@ -51,101 +52,19 @@ const PCA9685_ADDRESS: u8 = 0x40;
 const TICK_BYTES: usize = ssc32::group_move_max_len(MAX_SERVOS);
 /// I²C record of one tick: 2 + 5 bytes per servo and the driver's MODE1 write.
 const I2C_RECORD_BYTES: usize = 7 * MAX_SERVOS + 8;
-/// Bound on the ticks of a return to neutral.
-const MAX_STOP_TICKS: u32 = 100_000;
+/// The servos of a rig (its `RigServo`s, rate and limits) and the limiter that holds every
+/// pulse to their limits.
+pub type Rig = Playback<MAX_SERVOS>;
 
-/// The servos of a rig and the limiter that holds every pulse to their limits.
-pub struct Rig {
-    servos: [RigServo; MAX_SERVOS],
-    count: usize,
-    limiter: Limiter<MAX_SERVOS>,
-    rate_mhz: u32,
-}
-
-impl Rig {
-    /// The rig table of a servo clip, with its limits; the limiter starts at neutral.
-    pub fn from_clip(clip: &Clip<'_>) -> Result<Self, Failure> {
-        let table = clip
-            .rig()
-            .ok_or(Failure::Servo("the clip has no rig table"))?;
-        if table.servo_count() > MAX_SERVOS {
-            return Err(Failure::Servo("more servos than MAX_SERVOS"));
-        }
-        let rate_mhz = table.rate_mhz();
-        let idle = RigServo {
-            output: 0,
-            angle_lo_mdeg: 0,
-            angle_hi_mdeg: 1,
-            pulse_lo_qus: 6000,
-            pulse_hi_qus: 6000,
-            neutral_qus: 6000,
-            max_speed_mdeg_s: 0,
-        };
-        let mut servos = [idle; MAX_SERVOS];
-        let mut count = 0;
-        for (slot, s) in servos.iter_mut().zip(table.servos()) {
-            *slot = s;
-            count += 1;
-        }
-        let mut limits = [ServoLimits {
-            min_qus: 6000,
-            max_qus: 6000,
-            neutral_qus: 6000,
-            max_step_qus: 0,
-        }; MAX_SERVOS];
-        for (l, s) in limits.iter_mut().zip(&servos).take(count) {
-            let (lo, hi) = s.pulse_range_qus();
-            *l = ServoLimits::new(lo, hi, s.neutral_qus, s.max_step_qus(rate_mhz))
-                .map_err(|e| Failure::ServoCrate("limits", e))?;
-        }
-        let limiter = Limiter::new(limits).map_err(|e| Failure::ServoCrate("limits", e))?;
-        Ok(Rig {
-            servos,
-            count,
-            limiter,
-            rate_mhz,
-        })
-    }
-
-    pub fn count(&self) -> usize {
-        self.count
-    }
-
-    pub fn rate_mhz(&self) -> u32 {
-        self.rate_mhz
-    }
-
-    /// Whether `clip`'s rig table is this rig (rate and every servo).
-    pub fn matches(&self, clip: &Clip<'_>) -> bool {
-        clip.rig().is_some_and(|table| {
-            table.rate_mhz() == self.rate_mhz
-                && table.servo_count() == self.count
-                && table.servos().zip(&self.servos).all(|(a, b)| a == *b)
-        })
-    }
-
-    /// Every servo's controller channel, rig order (only the first `count` are servos).
-    fn outputs(&self) -> [u16; MAX_SERVOS] {
-        let mut outputs = [0u16; MAX_SERVOS];
-        for (o, s) in outputs.iter_mut().zip(&self.servos) {
-            *o = s.output;
-        }
-        outputs
-    }
-
-    /// Pulses for decoded angles (one per servo) through the rig's integer mapping.
-    fn targets(&self, angles: &[i32]) -> [u16; MAX_SERVOS] {
-        let mut targets = [6000u16; MAX_SERVOS];
-        for ((t, s), &a) in targets
-            .iter_mut()
-            .zip(&self.servos)
-            .zip(angles)
-            .take(self.count)
-        {
-            *t = s.pulse_qus(a);
-        }
-        targets
-    }
+/// The rig table of a servo clip, with its limits; the limiter starts at neutral.
+pub fn rig_of(clip: &Clip<'_>) -> Result<Rig, Failure> {
+    let table = clip
+        .rig()
+        .ok_or(Failure::Servo("the clip has no rig table"))?;
+    Rig::from_rig(table).map_err(|e| match e {
+        PlaybackError::Limits { error, .. } => Failure::ServoCrate("limits", error),
+        _ => Failure::Servo("more servos than MAX_SERVOS"),
+    })
 }
 
 /// Instruction figures of the timed ticks.
@@ -158,23 +77,20 @@ pub struct TickStats {
     pub output_ticks: u64,
 }
 
-/// One playback loop's state: the rig's limiter, the output, and what prints a tick's line.
+/// One playback loop's state: the rig's playback, the output, and what prints a tick's line.
 pub struct Driver<O, S> {
     pub rig: Rig,
     output: O,
     show: S,
-    held: [u16; MAX_SERVOS],
     pub stats: TickStats,
 }
 
 impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
     fn new(rig: Rig, output: O, show: S) -> Self {
-        let held = *rig.limiter.last();
         Driver {
             rig,
             output,
             show,
-            held,
             stats: TickStats::default(),
         }
     }
@@ -189,11 +105,10 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
         text: &mut Out,
     ) -> Result<(), Failure> {
         self.rig
-            .limiter
-            .apply(targets, &mut self.held)
+            .limit(targets)
             .map_err(|e| Failure::ServoCrate("limiter", e))?;
         let before_output = ticks::now();
-        self.send()?;
+        self.rig.write(&mut self.output)?;
         let end = ticks::now();
         let spent = ticks::since(start, end);
         self.stats.output_ticks += u64::from(ticks::since(before_output, end));
@@ -218,44 +133,10 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
         self.command(&targets, start, text)
     }
 
-    /// One tick towards neutral at the speed limits; `true` once every servo is there.
-    pub fn stop_tick(&mut self, text: &mut Out) -> Result<bool, Failure> {
-        let parked = self
-            .rig
-            .limiter
-            .stop_step(&mut self.held)
-            .map_err(|e| Failure::ServoCrate("stop", e))?;
-        self.send()?;
-        (self.show)(text)?;
-        Ok(parked)
-    }
-
     /// Returns every servo to neutral at its speed limit (nothing when already there).
     pub fn park(&mut self, text: &mut Out) -> Result<(), Failure> {
-        if self.parked() {
-            return Ok(());
-        }
-        for _ in 0..MAX_STOP_TICKS {
-            if self.stop_tick(text)? {
-                return Ok(());
-            }
-        }
-        Err(Failure::Servo("return to neutral did not finish"))
-    }
-
-    /// Whether every servo was last commanded its neutral (true before the first tick).
-    pub fn parked(&self) -> bool {
-        self.rig
-            .limiter
-            .limits()
-            .iter()
-            .zip(self.rig.limiter.last())
-            .all(|(l, &p)| p == l.neutral_qus)
-    }
-
-    fn send(&mut self) -> Result<(), Failure> {
-        let pulses = self.held.get(..self.rig.count).unwrap_or(&[]);
-        self.output.write(pulses).map_err(output_failure)
+        let show = &mut self.show;
+        self.rig.park(&mut self.output, |_| show(text))
     }
 
     /// Per-tick figures: `# <key>= per_tick= max_tick= output_per_tick= cpu_x10000_at_48mhz=`.
@@ -277,16 +158,18 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
             // Share of a 48 MHz core at one instruction per cycle, in 1/100 %.
             .kv(
                 "cpu_x10000_at_48mhz",
-                per_tick * u64::from(self.rig.rate_mhz) / 1000 * 10_000 / 48_000_000,
+                per_tick * u64::from(self.rig.rate_mhz()) / 1000 * 10_000 / 48_000_000,
             )
             .nl();
     }
 }
 
-fn output_failure<E>(e: OutputError<E>) -> Failure {
-    match e {
-        OutputError::Invalid(e) => Failure::ServoCrate("output", e),
-        _ => Failure::Servo("output device failed"),
+impl<E> From<OutputError<E>> for Failure {
+    fn from(e: OutputError<E>) -> Self {
+        match e {
+            OutputError::Invalid(e) => Failure::ServoCrate("output", e),
+            _ => Failure::Servo("output device failed"),
+        }
     }
 }
 
@@ -303,7 +186,7 @@ pub trait Mode {
 /// its `# output=…` line, and runs `mode` on it.
 pub fn drive<M: Mode>(rig: Rig, mode: M, text: &mut Out) -> Result<(), Failure> {
     let all = rig.outputs();
-    let outputs = all.get(..rig.count).unwrap_or(&[]);
+    let outputs = all.get(..rig.count()).unwrap_or(&[]);
     let invalid = |e| Failure::ServoCrate("output", e);
     match SERVO {
         PWM => {
@@ -333,8 +216,7 @@ pub fn drive<M: Mode>(rig: Rig, mode: M, text: &mut Out) -> Result<(), Failure> 
                 .kv("address", u64::from(PCA9685_ADDRESS))
                 .kv("prescale", u64::from(pca9685::PRESCALE_50HZ))
                 .nl();
-            let device =
-                Pca9685Servos::new(&bus, Address::from(PCA9685_ADDRESS)).map_err(output_failure)?;
+            let device = Pca9685Servos::new(&bus, Address::from(PCA9685_ADDRESS))?;
             // The set-up writes (prescale, wake) on a line of their own.
             print_i2c(&bus, text)?;
             let output = Pca9685Output::new(device, outputs).map_err(invalid)?;
@@ -344,7 +226,7 @@ pub fn drive<M: Mode>(rig: Rig, mode: M, text: &mut Out) -> Result<(), Failure> 
         SSC32 => {
             let port = SerialRecorder::<TICK_BYTES>::new();
             // The tick in ms, rounded (as `mocap play`).
-            let mhz = u64::from(rig.rate_mhz.max(1));
+            let mhz = u64::from(rig.rate_mhz().max(1));
             let period_ms = u16::try_from((1_000_000 + mhz / 2) / mhz)
                 .unwrap_or(u16::MAX)
                 .max(1);
@@ -424,16 +306,16 @@ impl Mode for FlashClip<'_> {
     ) -> Result<(), Failure> {
         let mut player =
             decoder_glue::new_player(self.clip).map_err(|e| Failure::Decoder("player", e))?;
-        let rate_mhz = driver.rig.rate_mhz;
-        let n_ticks = tick_count(self.clip.header().duration_us(), rate_mhz);
+        let n_ticks = driver.rig.tick_count(self.clip.header().duration_us());
         text.str("# mode=servo")
-            .kv("servos", driver.rig.count as u64)
-            .kv("rate_mhz", u64::from(rate_mhz))
+            .kv("servos", driver.rig.count() as u64)
+            .kv("rate_mhz", u64::from(driver.rig.rate_mhz()))
             .kv("ticks", n_ticks)
             .nl();
         let mut angles = [0i32; PLAYER_WORDS];
         for i in 0..n_ticks {
-            driver.clip_tick(&mut player, tick_us(i, rate_mhz), &mut angles, text)?;
+            let t_us = driver.rig.tick_us(i);
+            driver.clip_tick(&mut player, t_us, &mut angles, text)?;
         }
         driver.park(text)?;
         driver.print_stats("servo_ticks", self.calibration_ticks, text);
@@ -446,7 +328,7 @@ impl Mode for FlashClip<'_> {
 
 /// Servo mode: the flash clip through the selected output.
 pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Result<(), Failure> {
-    let rig = Rig::from_clip(clip)?;
+    let rig = rig_of(clip)?;
     drive(
         rig,
         FlashClip {

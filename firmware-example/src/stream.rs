@@ -43,7 +43,7 @@
 //! prints its link figures.
 
 use heapless::Deque;
-use mocap_decoder::{tick_count, tick_us, Clip};
+use mocap_decoder::Clip;
 use mocap_servo::output::ServoOutput;
 use mocap_servo::stream::upload::{bitmap_words, Accepted, Play, Upload};
 use mocap_servo::stream::{
@@ -440,12 +440,12 @@ fn play<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
     let Ok(mut player) = decoder_glue::new_player::<PLAYER_WORDS>(clip) else {
         return Ok(Played::Failed);
     };
-    let rate_mhz = driver.rig.rate_mhz();
-    let n_ticks = tick_count(clip.header().duration_us(), rate_mhz);
+    let n_ticks = driver.rig.tick_count(clip.header().duration_us());
     let mut angles = [0i32; PLAYER_WORDS];
     loop {
         for i in 0..n_ticks {
-            match driver.clip_tick(&mut player, tick_us(i, rate_mhz), &mut angles, text) {
+            let t_us = driver.rig.tick_us(i);
+            match driver.clip_tick(&mut player, t_us, &mut angles, text) {
                 Err(Failure::Decoder(..)) => return Ok(Played::Failed),
                 other => other?,
             }
@@ -559,7 +559,7 @@ impl Mode for Stream {
             let clip = upload
                 .complete(&buffer)
                 .and_then(|bytes| decoder_glue::parse(bytes).ok())
-                .filter(|clip| driver.rig.matches(clip));
+                .filter(|clip| clip.rig().is_some_and(|rig| driver.rig.matches(rig)));
             let Some(clip) = clip else {
                 // Corrupt or another rig's: forget it, so that a later pass can refill it.
                 upload.reset();

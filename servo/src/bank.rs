@@ -20,15 +20,20 @@ pub const PERIOD_50HZ_US: NonZeroU32 = match NonZeroU32::new(20_000) {
 /// The duty cycle, out of `max_duty`, of a pulse of `pulse_qus` quarter-µs in
 /// a period of `period_us` µs: rounded to nearest, saturating at `max_duty`.
 pub const fn duty_cycle(pulse_qus: u16, period_us: NonZeroU32, max_duty: u16) -> u16 {
-    let period_qus = 4 * period_us.get() as u64;
+    // u32 · 4 and u16 · u16 cannot overflow their types.
+    let period_qus = (period_us.get() as u64).wrapping_mul(4);
     // 32-bit arithmetic when it cannot overflow (any servo period): a 64-bit
     // division is a library call on Cortex-M, 16 of them a tick cost ~10k
     // instructions on an M3.
-    let product = pulse_qus as u32 * max_duty as u32;
+    let product = (pulse_qus as u32).wrapping_mul(max_duty as u32);
     if period_qus <= u32::MAX as u64 {
         let period = period_qus as u32;
         if let Some(num) = product.checked_add(period / 2) {
-            let duty = num / period;
+            // period >= 4 (a non-zero period in quarter-µs).
+            let duty = match num.checked_div(period) {
+                Some(duty) => duty,
+                None => max_duty as u32,
+            };
             return if duty > max_duty as u32 {
                 max_duty
             } else {
@@ -36,7 +41,14 @@ pub const fn duty_cycle(pulse_qus: u16, period_us: NonZeroU32, max_duty: u16) ->
             };
         }
     }
-    let duty = (pulse_qus as u64 * max_duty as u64 + period_qus / 2) / period_qus;
+    // u16 · u16 + u34 cannot overflow u64; period_qus >= 4.
+    let num = (pulse_qus as u64)
+        .wrapping_mul(max_duty as u64)
+        .wrapping_add(period_qus / 2);
+    let duty = match num.checked_div(period_qus) {
+        Some(duty) => duty,
+        None => max_duty as u64,
+    };
     if duty > max_duty as u64 {
         max_duty
     } else {

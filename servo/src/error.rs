@@ -86,6 +86,12 @@ pub enum Error {
     OutputChannelsNotConsecutive,
     /// A serial port accepted none of the bytes written to it.
     OutputWriteZero,
+    /// The return to neutral did not end (a servo without a speed limit is
+    /// parked in one tick; one limited to 1/4 µs per tick in 65 535).
+    NotParked {
+        /// Ticks it took.
+        ticks: u32,
+    },
 }
 
 impl fmt::Display for Error {
@@ -133,6 +139,9 @@ impl fmt::Display for Error {
                 f.write_str("an SSC-32 group move needs consecutive channels")
             }
             Error::OutputWriteZero => f.write_str("the serial port accepted no bytes"),
+            Error::NotParked { ticks } => {
+                write!(f, "the return to neutral did not finish in {ticks} ticks")
+            }
         }
     }
 }

@@ -13,8 +13,9 @@
 //! # Flow
 //!
 //! ```text
-//! decoded frame / streamed Pose ──► Limiter::apply ──► ServoOutput::write
-//!                                   (clamp, speed)     ├► PwmOutput     → ServoBank::write     (PWM)
+//! decoded frame / streamed Pose ──► Playback::tick ──► ServoOutput::write
+//!                              (Limiter::apply: clamp, speed)
+//!                                                      ├► PwmOutput     → ServoBank::write     (PWM)
 //!                                                      ├► Pca9685Output → Pca9685Servos::write (I²C)
 //!                                                      ├► MaestroOutput → maestro::set_target  (UART)
 //!                                                      └► Ssc32Output   → ssc32::group_move    (UART)
@@ -22,8 +23,9 @@
 //!
 //! Every output should take its pulses from a [`Limiter`]: it is what
 //! guarantees that no pulse outside a servo's limits is ever commanded.
-//! [`output`] puts the four outputs behind one trait, so one playback loop
-//! drives any of them; [`record`] has devices that record instead of
+//! [`output`] puts the four outputs behind one trait, so one playback loop,
+//! [`playback`] (rig servos, limits, tick clock, return to neutral), drives
+//! any of them for `mocap play` and the firmware alike; [`record`] has devices that record instead of
 //! driving hardware (QEMU, host checks).
 //!
 //! # Features
@@ -34,13 +36,16 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// The panic-free lints are denied in Cargo.toml; tests may unwrap, index and
+// do plain arithmetic.
 #![cfg_attr(
-    not(test),
-    deny(
+    test,
+    allow(
         clippy::indexing_slicing,
         clippy::unwrap_used,
         clippy::expect_used,
-        clippy::panic
+        clippy::panic,
+        clippy::arithmetic_side_effects
     )
 )]
 
@@ -54,6 +59,7 @@ pub mod maestro;
 pub mod output;
 #[cfg(feature = "pca9685")]
 pub mod pca9685;
+pub mod playback;
 pub mod record;
 pub mod ssc32;
 pub mod stream;
@@ -66,4 +72,5 @@ pub use limits::{Limiter, ServoLimits};
 pub use output::ServoOutput;
 #[cfg(feature = "pca9685")]
 pub use pca9685::Pca9685Servos;
+pub use playback::{Playback, PlaybackError};
 pub use stream::{decode_frame, encode_frame, FrameReceiver, Message};

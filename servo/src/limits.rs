@@ -71,14 +71,16 @@ impl ServoLimits {
         if self.max_step_qus == 0 {
             target
         } else if target > from_qus {
-            // Both sides are u16, so the difference cannot underflow.
-            if target - from_qus > self.max_step_qus {
-                from_qus + self.max_step_qus
+            // target > from, so the difference cannot wrap, and from + step
+            // stays below target <= u16::MAX.
+            if target.wrapping_sub(from_qus) > self.max_step_qus {
+                from_qus.wrapping_add(self.max_step_qus)
             } else {
                 target
             }
-        } else if from_qus - target > self.max_step_qus {
-            from_qus - self.max_step_qus
+        } else if from_qus.wrapping_sub(target) > self.max_step_qus {
+            // from - step stays above target >= 0.
+            from_qus.wrapping_sub(self.max_step_qus)
         } else {
             target
         }

@@ -29,7 +29,7 @@ pub const SET_TARGET_LEN: usize = 4;
 
 /// Bytes of a Set Multiple Targets command for `count` targets.
 pub const fn set_multiple_targets_len(count: usize) -> usize {
-    3 + 2 * count
+    count.saturating_mul(2).saturating_add(3)
 }
 
 /// Encodes Set Target for `channel` into `buf`; returns 4.
@@ -59,7 +59,7 @@ pub fn set_multiple_targets(
     let Some(last) = targets_qus.len().checked_sub(1) else {
         return Ok(0);
     };
-    check_channel(usize::from(first_channel) + last)?;
+    check_channel(usize::from(first_channel).saturating_add(last))?;
     // check_channel bounds the count by 128, so it fits a data byte.
     let count = targets_qus.len() as u8;
     let needed = set_multiple_targets_len(targets_qus.len());

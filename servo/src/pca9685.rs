@@ -27,17 +27,25 @@ pub const PRESCALE_50HZ: u8 = prescale_for_hz(50);
 
 /// `round(OSCILLATOR_HZ / (4096 · hz)) − 1`, the datasheet's formula,
 /// saturated to the register's range `3..=255`. `hz` must be non-zero
-/// (0 is treated as 1).
+/// (0 is treated as 1); any `hz` is accepted (above ~6.1 kHz the prescale
+/// is its minimum, 3).
 pub const fn prescale_for_hz(hz: u32) -> u8 {
-    let hz = if hz == 0 { 1 } else { hz };
-    let divisor = STEPS * hz;
-    let rounded = (OSCILLATOR_HZ + divisor / 2) / divisor;
+    // `STEPS * hz` saturates: wrapping (hz >= 2^20 gives 0) would divide by
+    // zero, and any divisor above 2 · OSCILLATOR_HZ rounds to 0 alike.
+    let divisor = STEPS.saturating_mul(if hz == 0 { 1 } else { hz });
+    let rounded = match OSCILLATOR_HZ
+        .saturating_add(divisor / 2)
+        .checked_div(divisor)
+    {
+        Some(rounded) => rounded,
+        None => 0,
+    };
     if rounded <= 4 {
         3
     } else if rounded > 256 {
         255
     } else {
-        (rounded - 1) as u8
+        rounded.wrapping_sub(1) as u8
     }
 }
 
@@ -45,8 +53,15 @@ pub const fn prescale_for_hz(hz: u32) -> u8 {
 /// `round(pulse · 25 MHz / (prescale + 1))`, saturating at 4095.
 pub const fn off_count(pulse_qus: u16, prescale: u8) -> u16 {
     // One step is (prescale + 1) / 25 µs = 4 · (prescale + 1) / 25 quarter-µs.
-    let step_scaled = 4 * (prescale as u32 + 1);
-    let count = (pulse_qus as u32 * 25 + step_scaled / 2) / step_scaled;
+    // Small enough for u32 (<= 1024, <= 65535 · 25 + 512); step_scaled >= 4.
+    let step_scaled = (prescale as u32).wrapping_add(1).wrapping_mul(4);
+    let num = (pulse_qus as u32)
+        .wrapping_mul(25)
+        .wrapping_add(step_scaled / 2);
+    let count = match num.checked_div(step_scaled) {
+        Some(count) => count,
+        None => STEPS - 1,
+    };
     if count > STEPS - 1 {
         (STEPS - 1) as u16
     } else {
@@ -81,7 +96,7 @@ impl<I2C: I2c> Pca9685Servos<I2C> {
         first_channel: u8,
         pulses_qus: &[u16],
     ) -> Result<(), Pca9685Error<I2C::Error>> {
-        let last = usize::from(first_channel) + pulses_qus.len().saturating_sub(1);
+        let last = usize::from(first_channel).saturating_add(pulses_qus.len().saturating_sub(1));
         let out_of_range = Error::ChannelOutOfRange {
             channel: last,
             max: MAX_CHANNEL,
@@ -119,6 +134,22 @@ mod tests {
         assert_eq!(prescale_for_hz(1526), 3);
         assert_eq!(prescale_for_hz(24), 253);
         assert_eq!(prescale_for_hz(0), 255);
+    }
+
+    /// error_case_1: `STEPS * hz` used to wrap to 0 at `hz = 2^20` (and to
+    /// small divisors above it), then divide by zero or give a wrong prescale.
+    #[test]
+    fn error_case_1_prescale_of_huge_rates_is_the_minimum() {
+        for hz in [6104, 1 << 20, (1 << 20) + 1, 3 << 20, 1 << 31, u32::MAX] {
+            assert_eq!(prescale_for_hz(hz), 3, "{hz} Hz");
+        }
+        // Every rate: in the register's range, never rising with the rate.
+        let mut last = prescale_for_hz(1);
+        for hz in (1..=u32::MAX).step_by(65_537) {
+            let prescale = prescale_for_hz(hz);
+            assert!((3..=255).contains(&prescale) && prescale <= last, "{hz} Hz");
+            last = prescale;
+        }
     }
 
     #[test]

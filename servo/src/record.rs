@@ -131,7 +131,7 @@ impl<const CAP: usize> embedded_io::Write for &SerialRecorder<CAP> {
     /// Keeps as many bytes as fit; [`RecordError::Full`] when none do.
     fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
         let mut bytes = self.bytes.try_borrow_mut().map_err(|_| RecordError::Busy)?;
-        let room = CAP - bytes.len();
+        let room = CAP.saturating_sub(bytes.len());
         if room == 0 && !buf.is_empty() {
             return Err(RecordError::Full);
         }

@@ -21,13 +21,13 @@ pub const MAX_PULSE_US: u16 = 2500;
 
 /// Longest group move for `count` servos: `#31P2500` per servo, `T65535\r`.
 pub const fn group_move_max_len(count: usize) -> usize {
-    8 * count + 7
+    count.saturating_mul(8).saturating_add(7)
 }
 
 /// The SSC-32 pulse (µs) for a pulse in quarter-µs: rounded, then clamped to
 /// `500..=2500`.
 pub const fn pulse_us(pulse_qus: u16) -> u16 {
-    let us = (pulse_qus as u32 + 2) / 4; // <= 16384: fits u16
+    let us = (pulse_qus as u32).wrapping_add(2) / 4; // <= 16384: fits u16
     if us < MIN_PULSE_US as u32 {
         MIN_PULSE_US
     } else if us > MAX_PULSE_US as u32 {
@@ -45,7 +45,8 @@ pub fn group_move(
     time_ms: u16,
     buf: &mut [u8],
 ) -> Result<usize, Error> {
-    let last_channel = usize::from(first_channel) + pulses_qus.len().saturating_sub(1);
+    let last_channel =
+        usize::from(first_channel).saturating_add(pulses_qus.len().saturating_sub(1));
     if last_channel > usize::from(MAX_CHANNEL) {
         return Err(Error::ChannelOutOfRange {
             channel: last_channel,
@@ -106,21 +107,23 @@ impl<'a> Cursor<'a> {
         if let Some(slot) = self.buf.get_mut(self.len) {
             *slot = byte;
         }
-        self.len += 1;
+        // Counts on past the buffer (the length a caller needed); at most a
+        // group move's length, far from wrapping.
+        self.len = self.len.wrapping_add(1);
     }
 
     fn decimal(&mut self, mut value: u32) {
         let mut digits = [0u8; 10];
-        let mut count = 0;
+        let mut count = 0usize;
         for digit in digits.iter_mut().rev() {
-            *digit = b'0' + (value % 10) as u8;
+            *digit = b'0'.wrapping_add((value % 10) as u8);
             value /= 10;
-            count += 1;
+            count = count.wrapping_add(1); // <= 10 digits
             if value == 0 {
                 break;
             }
         }
-        for &digit in digits.iter().skip(digits.len() - count) {
+        for &digit in digits.iter().skip(digits.len().saturating_sub(count)) {
             self.byte(digit);
         }
     }

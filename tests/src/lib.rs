@@ -1,8 +1,11 @@
 //! Shared helpers for the workspace tests: where the corpus is, and a
 //! visible skip when it is not there; running the firmware in QEMU
-//! (`scripts/firmware.sh`); the demo's servo clip.
+//! (`scripts/firmware.sh`) and comparing its output with committed
+//! snapshots ([`snapshot`]); the demo's servo clip.
 
 use std::path::PathBuf;
+
+pub mod snapshot;
 
 /// The corpus folder: `$MOCAP_CORPUS` (a relative path is taken from the
 /// workspace root), else `../shared/data` beside the workspace root.

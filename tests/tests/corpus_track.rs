@@ -1,8 +1,8 @@
 //! Motion Track on the corpus: a decoded clip follows its source.
 
-use mocap_encoder::track::features::{quat_frames, rotating_joints};
-use mocap_encoder::track::som::SomConfig;
-use mocap_encoder::track::{build_reference, Track, TrackOptions};
+use mocap_report::track::features::{quat_frames, rotating_joints};
+use mocap_report::track::som::SomConfig;
+use mocap_report::track::{build_reference, Track, TrackOptions};
 use mocap_tests::corpus_file;
 
 fn small_options() -> TrackOptions {
@@ -77,7 +77,7 @@ fn corpus_decoded_clip_tracks_its_source() {
         .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt())
         .sum::<f64>()
         / tracks[0].xy.len() as f64;
-    let stats = mocap_encoder::track::pair_stats(&tracks);
+    let stats = mocap_report::track::pair_stats(&tracks);
     let walk_run = stats.iter().find(|p| p.a == 0 && p.b == 1).unwrap().between;
     eprintln!("walk vs decoded walk: {frame_gap:.4} per frame; walk vs run: {walk_run:.4}");
     assert!(frame_gap < 0.25 * walk_run, "{frame_gap} vs {walk_run}");

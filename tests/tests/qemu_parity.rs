@@ -6,6 +6,11 @@
 //! firmware's sample mode (`--sample-us`, `Player::sample_at`), compared with
 //! `clipfile::uart_text_sampled`.
 //!
+//! Every run's data lines are also compared with a committed snapshot,
+//! `tests/snapshots/<case>.out` (the same on every board; format and the
+//! overwrite switch `MOCAP_BLESS=1` in `tests/snapshots/README.md`), so a
+//! change that moves host and firmware together still shows.
+//!
 //! Needs `scripts/firmware.sh` to work (the README's test command installs
 //! what it needs). Without QEMU the test prints SKIPPED, unless `CI` is set,
 //! where a missing emulator is a failure.
@@ -15,6 +20,7 @@ use std::path::{Path, PathBuf};
 use mocap_decoder::Clip;
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, clipfile, generate, motion::Motion, units};
+use mocap_tests::snapshot::{check_snapshot, first_difference};
 use mocap_tests::{
     corpus_file, data_lines, qemu_available, run_firmware, servo_demo_clip, servo_demo_clip_with,
     workspace_root,
@@ -97,10 +103,10 @@ fn check_codec(
         let data = data_lines(&uart);
         assert!(
             data == expected,
-            "{name} on {board}: UART output differs from the host decoder ({} vs {} bytes)",
-            data.len(),
-            expected.len()
+            "{name} on {board}: UART output differs from the host decoder: {}",
+            first_difference(&expected, &data)
         );
+        check_snapshot(name, &data);
         let stats: Vec<&str> = uart.lines().filter(|l| l.starts_with("# ")).collect();
         eprintln!("{name} on {board}: {what} identical; {}", stats.join("; "));
     }
@@ -167,7 +173,7 @@ fn predictive_firmware_output_matches_host_on_three_cores() {
     let (path, bytes) = servo_demo_clip_with("servo-demo-pred", codec);
     let clip = Clip::parse(&bytes).unwrap();
     let expected = serial_lines(&clip, Protocol::Maestro);
-    check_servo_output(&path, "maestro", &expected, None);
+    check_servo_output("servo-demo-pred-maestro", &path, "maestro", &expected, None);
 }
 
 /// Servo mode: the demo's servo clip (`mocap encode --rig`) played by the
@@ -183,7 +189,7 @@ fn servo_clip_commands_match_host_on_three_cores() {
     let clip = Clip::parse(&bytes).unwrap();
     for (protocol, name) in [(Protocol::Maestro, "maestro"), (Protocol::Ssc32, "ssc32")] {
         let expected = serial_lines(&clip, protocol);
-        check_servo_output(&path, name, &expected, None);
+        check_servo_output(&format!("servo-demo-{name}"), &path, name, &expected, None);
     }
 }
 
@@ -211,8 +217,9 @@ fn serial_lines(clip: &Clip<'_>, protocol: mocap_encoder::play::Protocol) -> Str
 }
 
 /// Runs the firmware's servo mode with `output` on every board and compares
-/// its tick lines with `expected` (and its `# output=` line with `header`).
-fn check_servo_output(path: &Path, output: &str, expected: &str, header: Option<&str>) {
+/// its tick lines with `expected` (and its `# output=` line with `header`),
+/// and with the snapshot `case`.
+fn check_servo_output(case: &str, path: &Path, output: &str, expected: &str, header: Option<&str>) {
     for board in BOARDS {
         let uart = run_board_with(board, path, None, Some(output));
         if let Some(header) = header {
@@ -222,10 +229,10 @@ fn check_servo_output(path: &Path, output: &str, expected: &str, header: Option<
         let data = data_lines(&uart);
         assert!(
             data == expected,
-            "servo clip on {board}: {output} lines differ from the host ({} vs {} ticks)",
-            data.lines().count(),
-            expected.lines().count()
+            "servo clip on {board}: {output} lines differ from the host: {}",
+            first_difference(expected, &data)
         );
+        check_snapshot(case, &data);
         let stats: Vec<&str> = uart.lines().filter(|l| l.starts_with("# ")).collect();
         eprintln!(
             "servo clip on {board}: {} lines of {output} output identical; {}",
@@ -327,6 +334,12 @@ fn servo_clip_pwm_and_pca9685_match_host_on_three_cores() {
             format!("# output=pca9685 address={PCA9685_ADDRESS} prescale=121"),
         ),
     ] {
-        check_servo_output(&path, output, expected, Some(&header));
+        check_servo_output(
+            &format!("servo-demo-{output}"),
+            &path,
+            output,
+            expected,
+            Some(&header),
+        );
     }
 }

@@ -20,6 +20,8 @@
 //! - Every run's session figures and last `Status` are those of [`session_model`]: the host's
 //!   `FrameReceiver` and the firmware's own upload rule (`mocap_servo::stream::upload`) on the
 //!   same bytes, up to where the firmware stopped reading.
+//! - Every run's servo commands match the committed snapshot `tests/snapshots/stream-<input>.out`
+//!   (`tests/snapshots/README.md`; `MOCAP_BLESS=1` overwrites it).
 //!
 //! A corrupted stream that will not play is followed by a clean `00 Stop`, as a host repeats
 //! `Stop` until the firmware confirms it: the stream's own `Stop` may be lost, and the firmware
@@ -40,6 +42,7 @@ use mocap_servo::stream::{
     PROTOCOL_VERSION,
 };
 use mocap_servo::{Limiter, ServoLimits};
+use mocap_tests::snapshot::check_snapshot;
 use mocap_tests::{qemu_available, run_firmware, servo_demo_clip, workspace_root};
 
 const BOARDS: [&str; 3] = ["microbit", "lm3s6965", "mps2-an386"];
@@ -706,6 +709,9 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
             } else {
                 assert!(run.ticks.is_empty(), "{what}: a refused clip moved servos");
             }
+            // The servo commands (not the Status frames, whose counts depend on how far the
+            // firmware had read) against their committed snapshot.
+            check_snapshot(&format!("stream-{name}"), &run.maestro);
             if *hits == 0 && *same_rig {
                 assert_eq!(last.dropped, 0, "{what}");
             } else if *hits > 0 {

@@ -8,6 +8,7 @@ use mocap_decoder::consts::index::{ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN,
 
 use super::bits::BitWriter;
 use super::quantizer::{self, Codebook};
+use super::CodecError;
 
 /// Key-frame intervals the encoder tries when none is forced
 /// (0 = absolute codes only).
@@ -282,7 +283,7 @@ fn entry(channel: usize, cb: &Codebook, table: u16, accumulate: bool) -> Entry {
 impl IndexEncoding {
     /// The codec section bytes (SPEC.md §4.1). Fails if the table pool
     /// exceeds the 16-bit offsets of the format.
-    pub fn to_section(&self) -> Result<Vec<u8>, String> {
+    pub fn to_section(&self) -> Result<Vec<u8>, CodecError> {
         let mut pool = Pool {
             entries: Vec::new(),
         };
@@ -315,10 +316,9 @@ impl IndexEncoding {
             }
         }
         if pool.entries.len() > usize::from(u16::MAX) {
-            return Err(format!(
-                "index codec: {} table entries exceed the format's 65535 (loosen the error bound)",
-                pool.entries.len()
-            ));
+            return Err(CodecError::IndexTableTooLarge {
+                entries: pool.entries.len(),
+            });
         }
         let (key_bytes, key_order) = write_set(&key);
         let (delta_bytes, delta_order) = write_set(&delta);
@@ -468,5 +468,45 @@ impl SectionInfo {
             }
         }
         out
+    }
+
+    /// The lines `mocap info` prints for the section of a clip with this
+    /// `header`; with `channels`, one line per channel.
+    pub fn describe(&self, header: &mocap_decoder::Header<'_>, channels: bool) -> String {
+        let chans = self.per_channel(header.channel_count());
+        let n = chans.len().max(1);
+        let key: u32 = chans.iter().map(|c| u32::from(c.key_bits)).sum();
+        let delta: u32 = chans
+            .iter()
+            .map(|c| u32::from(c.delta_bits.unwrap_or(0)))
+            .sum();
+        let unchanged = chans.iter().filter(|c| c.delta_bits.is_none()).count();
+        let deltas = chans.iter().filter(|c| c.accumulate).count();
+        let mut s = format!(
+            "  index codec: key interval {}, table {} entries, payload {} bytes, {} key groups, {} delta groups\n  bits per frame: key {key} ({:.2}/channel), delta {delta} ({:.2}/channel)\n  channels: {unchanged} unchanged between key frames, {deltas} delta-coded, {} absolute\n",
+            self.key_interval,
+            self.table_entries,
+            self.payload_bytes,
+            self.key.len(),
+            self.delta.len(),
+            key as f64 / n as f64,
+            delta as f64 / n as f64,
+            n - unchanged - deltas
+        );
+        if channels {
+            for (c, (ch, d)) in header.channels().zip(&chans).enumerate() {
+                s += &format!(
+                    "  {c:4} {}.{:<10} key {:2} bits, delta {} bits{} range [{}, {}]\n",
+                    ch.joint_name,
+                    ch.kind.name(),
+                    d.key_bits,
+                    d.delta_bits.map_or("-".to_string(), |b| format!("{b:2}")),
+                    if d.accumulate { " (acc)" } else { "" },
+                    ch.min,
+                    ch.max
+                );
+            }
+        }
+        s
     }
 }

@@ -11,6 +11,7 @@ use mocap_decoder::consts::predictive::{
 
 use mocap_decoder::predictive::{predict, value};
 
+use super::CodecError;
 use crate::container::{varint, zigzag, ByteCursor};
 
 /// Frames per block when the caller does not choose: about this many
@@ -53,10 +54,10 @@ impl Mode {
 /// Encodes `values` (`[channel][frame]`, all the same length ≥ 1) with
 /// every decoded value within `tol[c]` of the input, in blocks of
 /// `block_frames` frames.
-pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Encoded, String> {
+pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Encoded, CodecError> {
     let frames = values.first().map_or(0, Vec::len);
     if frames == 0 || values.iter().any(|v| v.len() != frames) || tol.len() != values.len() {
-        return Err("internal error: predictive input shape".into());
+        return Err(CodecError::PredictiveShape);
     }
     let block = block_frames.max(1) as usize;
     // Largest usable tolerance: the step 2·tol + 1 must fit MAX_STEP.
@@ -106,7 +107,7 @@ pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Enc
                 }
             }
         }
-        let (_, mode, q) = best.ok_or("internal error: no predictive step")?;
+        let (_, mode, q) = best.ok_or(CodecError::NoPredictiveStep)?;
         modes.push(mode);
         greedy.push(q);
     }
@@ -224,6 +225,22 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
         weights,
         state_words: 3 * channels + mocap_decoder::consts::predictive::STATE_EXTRA_WORDS,
     })
+}
+
+impl SectionInfo {
+    /// The lines `mocap info` prints for the section.
+    pub fn describe(&self) -> String {
+        format!(
+            "  predictive codec: {} coded + {} constant channels, blocks of {} frames, {} blocks, {} bytes of range-coded residuals, state {} words\n  predictor weights (of 4) 0/2/3/4: {:?} channels\n",
+            self.coded,
+            self.constant,
+            self.block_frames,
+            self.blocks,
+            self.payload_bytes,
+            self.state_words,
+            self.weights
+        )
+    }
 }
 
 fn min_max(v: &[i32]) -> (i32, i32) {

@@ -158,7 +158,7 @@ impl<const WORDS: usize> Upload<WORDS> {
 
     /// The largest clip taken into `buffer`.
     pub const fn capacity(buffer_len: usize) -> usize {
-        let bits = WORDS * 32 * CHUNK_LEN;
+        let bits = WORDS.saturating_mul(32).saturating_mul(CHUNK_LEN);
         if buffer_len < bits {
             buffer_len
         } else {
@@ -232,9 +232,8 @@ impl<const WORDS: usize> Upload<WORDS> {
             total,
             capacity: Self::capacity(buffer.len()),
         };
-        let slot = buffer
-            .get_mut(start..start + bytes.len())
-            .ok_or(too_large)?;
+        let end = start.checked_add(bytes.len()).ok_or(too_large)?;
+        let slot = buffer.get_mut(start..end).ok_or(too_large)?;
         let word = self
             .bitmap
             .get_mut((index / 32) as usize)
@@ -242,7 +241,7 @@ impl<const WORDS: usize> Upload<WORDS> {
         slot.copy_from_slice(bytes);
         *word |= 1 << (index % 32);
         self.total = total;
-        self.received += 1;
+        self.received = self.received.saturating_add(1);
         Ok(Accepted::New)
     }
 
@@ -311,11 +310,13 @@ impl<const WORDS: usize> Upload<WORDS> {
         if offset >= total {
             return Err(Rejected::PastEnd { offset, total });
         }
-        let expected = ((total - offset) as usize).min(CHUNK_LEN);
+        // offset < total (checked above).
+        let expected = (total.wrapping_sub(offset) as usize).min(CHUNK_LEN);
         if len != expected {
             return Err(Rejected::WrongLength { len, expected });
         }
-        Ok(offset / CHUNK_LEN as u32)
+        const CHUNK_LEN_U32: u32 = CHUNK_LEN as u32;
+        Ok(offset / CHUNK_LEN_U32)
     }
 }
 

@@ -8,13 +8,14 @@
 //! degrees): PCA keeps components until every frame's residual is under
 //! `pca_share·τ`, keys are added until the spline error is under
 //! `key_share·τ`, and key values are quantised so their error stays near
-//! `quant_share·τ`. The encode pipeline (encode.rs) measures the decoded
+//! `quant_share·τ`. The encode pipeline (encode/) measures the decoded
 //! clip and moves `τ` until the bound holds.
 
 pub mod keys;
 pub mod pca;
 pub mod section;
 pub mod segment;
+pub mod weights;
 
 use mocap_decoder::consts::pca::{
     MAX_COMPONENTS, MAX_MEAN_SHIFT, MAX_SEGMENT_FRAMES, MAX_VALUE_BITS, MAX_VALUE_SHIFT,
@@ -22,6 +23,9 @@ use mocap_decoder::consts::pca::{
 
 pub use section::{inspect, SectionInfo};
 pub use segment::Ppca;
+pub use weights::{pca_groups, pca_weights};
+
+use super::CodecError;
 
 /// Encoder parameters; [`Params::new`] gives the defaults.
 #[derive(Clone, Debug)]
@@ -124,11 +128,11 @@ pub struct GroupModel {
 }
 
 /// Builds the model of a clip.
-pub fn model(input: &Input<'_>, p: &Params) -> Result<Model, String> {
+pub fn model(input: &Input<'_>, p: &Params) -> Result<Model, CodecError> {
     let channels = input.values.len();
     let frames = input.values.first().map_or(0, Vec::len);
     if frames == 0 {
-        return Err("no frames".into());
+        return Err(CodecError::NoFrames);
     }
     // Model the motion without its one-frame spikes; patches restore them.
     let clean: Vec<Vec<i32>> = input
@@ -173,7 +177,7 @@ pub fn model(input: &Input<'_>, p: &Params) -> Result<Model, String> {
         let groups = groups
             .iter()
             .map(|g| fit_group(input, g, start, end, p))
-            .collect::<Result<Vec<_>, String>>()?;
+            .collect::<Result<Vec<_>, CodecError>>()?;
         segments.push(SegmentModel {
             start: start as u32,
             end: end as u32,
@@ -279,7 +283,7 @@ fn fit_group(
     start: usize,
     end: usize,
     p: &Params,
-) -> Result<GroupModel, String> {
+) -> Result<GroupModel, CodecError> {
     let n = chans.len();
     let len = end - start + 1;
     let w: Vec<f64> = chans.iter().map(|&c| input.weights[c]).collect();
@@ -358,15 +362,15 @@ fn fit_group(
         let lo = *col.iter().min().unwrap_or(&0);
         let hi = *col.iter().max().unwrap_or(&0);
         if (lo as f64 * unit).abs() > limit || (hi as f64 * unit).abs() > limit {
-            return Err(format!(
-                "component coefficient {} out of range for channels {chans:?}",
-                lo.abs().max(hi.abs()) as f64 * unit
-            ));
+            return Err(CodecError::CoefficientOutOfRange {
+                value: lo.abs().max(hi.abs()) as f64 * unit,
+                channels: chans.to_vec(),
+            });
         }
         let span = (hi - lo) as u64;
         let width = 64 - span.leading_zeros() as u8;
         if width > MAX_VALUE_BITS {
-            return Err("key value range too wide".into());
+            return Err(CodecError::KeyRangeTooWide);
         }
         comps.push((width, s, (lo << s) as i32));
         for r in 0..m {

@@ -113,6 +113,32 @@ pub struct SectionInfo {
     pub patch_bytes: usize,
 }
 
+impl SectionInfo {
+    /// The lines `mocap info` prints for the section.
+    pub fn describe(&self) -> String {
+        let keys: usize = self
+            .segments
+            .iter()
+            .flat_map(|(_, _, g)| g.iter().map(|&(_, m)| m))
+            .sum();
+        let mut s = format!(
+            "  pca-spline codec: {} groups, {} constant channels, {} segments, {keys} keys\n  bytes: means {}, bases {}, keys {}, patches {}\n",
+            self.groups,
+            self.consts,
+            self.segments.len(),
+            self.mean_bytes,
+            self.basis_bytes,
+            self.key_bytes,
+            self.patch_bytes
+        );
+        for (start, end, groups) in &self.segments {
+            let g: Vec<String> = groups.iter().map(|(k, m)| format!("k{k}/{m}")).collect();
+            s += &format!("  segment {start}..={end}: {}\n", g.join(" "));
+        }
+        s
+    }
+}
+
 /// Reads the figures back from a section (already validated by the
 /// decoder); `None` if it does not parse.
 pub fn inspect(section: &[u8]) -> Option<SectionInfo> {

@@ -1,0 +1,75 @@
+//! `mocap eval`: decode a clip with the `no_std` decoder and measure it
+//! against its source BVH (text or JSON; `--plot` the per-frame error).
+
+use std::path::PathBuf;
+
+use mocap_encoder::{bvh, clipfile, fixed, metrics};
+use mocap_report::plot;
+
+use super::{parse_clip, read_clip, UnitArg};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The source BVH.
+    input: PathBuf,
+    /// The clip.
+    clip: PathBuf,
+    /// One JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Length unit of the input.
+    #[arg(long, default_value = "auto")]
+    units: UnitArg,
+    /// Also draw the per-frame joint-position error (`.svg` or `.png`).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+pub fn run(a: Args) -> super::Result {
+    let m = bvh::read_file(&a.input)?;
+    let unit = a.units.resolve(&m);
+    let bytes = read_clip(&a.clip)?;
+    let clip = parse_clip(&a.clip, &bytes)?;
+    let h = clip.header();
+    if h.channel_count() != m.channels() || h.frame_count() as usize != m.frames() {
+        return Err(format!(
+            "{} has {} frames × {} channels but {} has {} × {}",
+            a.clip.display(),
+            h.frame_count(),
+            h.channel_count(),
+            a.input.display(),
+            m.frames(),
+            m.channels()
+        )
+        .into());
+    }
+    let frames = clipfile::decode_all(&clip)?;
+    let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
+    let file_bytes = std::fs::metadata(&a.input)
+        .map(|x| x.len() as usize)
+        .unwrap_or(0);
+    let x = metrics::compare(&m, &back, unit.metres(), None, bytes.len(), file_bytes);
+    if let Some(p) = &a.plot {
+        plot::frame_error_plot(p, &m, &back, unit.metres(), &a.clip.display().to_string())?;
+        eprintln!("wrote {}", p.display());
+    }
+    if a.json {
+        println!("{}", serde_json::to_string(&x)?);
+    } else {
+        println!("bytes            {}", x.bytes);
+        println!("ratio vs f32     {:.2}:1", x.ratio_f32);
+        println!("ratio vs file    {:.2}:1", x.ratio_file);
+        println!("ARMS             {:.3} mm", x.arms_mm);
+        println!(
+            "max joint error  {:.3} mm ({} at frame {})",
+            x.max_joint_err_mm, x.max_joint_err_joint, x.max_joint_err_frame
+        );
+        println!("distortion d     {:.3} %", x.distortion_pct);
+        println!(
+            "angle RMS / max  {:.4}° / {:.4}°",
+            x.angle_rms_deg, x.angle_max_deg
+        );
+        println!("frames×channels  {}×{}", x.frames, x.channels);
+    }
+    Ok(())
+}

@@ -1,0 +1,78 @@
+//! `mocap send`: a clip uploaded to the firmware's streaming mode, or its
+//! live poses at the rig's rate (postcard + COBS + CRC frames, SPEC.md §8).
+
+use std::path::PathBuf;
+
+use mocap_encoder::play;
+
+use super::{parse_clip, read_clip, Destination};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Input .mcb clip.
+    clip: PathBuf,
+    #[command(flatten)]
+    dest: Destination,
+    /// Line rate used for pacing the clip upload, bit/s (8N1).
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
+    /// Ask the firmware to loop the clip.
+    #[arg(long = "loop", conflicts_with = "poses")]
+    looped: bool,
+    /// Send the whole upload (every chunk in order, then `Play`) this many times: a
+    /// carousel for a lossy line without a way back. The firmware keeps each chunk from
+    /// whichever pass brings it intact and starts the clip once it has every chunk and a
+    /// `Play`; a `Play` that comes first is remembered. At 1 % corrupted bytes the demo's
+    /// 19-chunk servo clip arrives whole with 1 pass never, 8 passes 87 %, 16 passes
+    /// 100 % (BENCHMARKS.md §5). Each pass costs the clip's bytes again.
+    #[arg(long, default_value_t = 1, conflicts_with = "poses",
+          value_parser = clap::value_parser!(u32).range(1..))]
+    passes: u32,
+    /// Send live poses (a servo clip's pulses at its rig's rate, paced in real time
+    /// unless --fast) instead of uploading the clip.
+    #[arg(long)]
+    poses: bool,
+}
+
+pub fn run(a: Args) -> super::Result {
+    let bytes = read_clip(&a.clip)?;
+    let c = parse_clip(&a.clip, &bytes)?;
+    if a.poses {
+        let p = play::pose_frames(&c)?;
+        let dest = a
+            .dest
+            .write(&p.frames, |i| std::time::Duration::from_micros(p.due_us(i)))?;
+        eprintln!(
+            "{}: {} poses at {} Hz, {} frames, {} bytes",
+            dest.display(),
+            p.frames.len() - 2,
+            f64::from(p.rate_mhz) / 1000.0,
+            p.frames.len(),
+            p.frames.iter().map(Vec::len).sum::<usize>()
+        );
+        return Ok(());
+    }
+    let frames = play::clip_frames(&bytes, a.looped, a.passes)?;
+    // Frame i goes out once the bytes before it have crossed the
+    // line: 10 bits per byte on an 8N1 line.
+    let before: Vec<usize> = frames
+        .iter()
+        .scan(0, |sent, f| {
+            let at = *sent;
+            *sent += f.len();
+            Some(at)
+        })
+        .collect();
+    let bit = 1.0 / f64::from(a.baud.max(1));
+    let dest = a.dest.write(&frames, |i| {
+        std::time::Duration::from_secs_f64(before[i] as f64 * 10.0 * bit)
+    })?;
+    eprintln!(
+        "{}: {} pass(es), {} frames, {} bytes",
+        dest.display(),
+        a.passes,
+        frames.len(),
+        frames.iter().map(Vec::len).sum::<usize>()
+    );
+    Ok(())
+}

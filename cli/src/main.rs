@@ -1,0 +1,71 @@
+//! `mocap`: the command line of the encoder. One module per subcommand
+//! (`cmd/`); the library (`mocap-encoder`) does the work and returns typed
+//! errors, which [`main`] prints.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod cmd;
+
+#[derive(Parser)]
+#[command(
+    name = "mocap",
+    version,
+    about = "Motion-capture codec for microcontrollers"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Encode a BVH file into a .mcb clip, proving the error bound.
+    Encode(cmd::encode::Args),
+    /// Decode a .mcb clip into BVH (or the firmware's text format).
+    Decode(cmd::decode::Args),
+    /// Show a clip's sections, channels and codec parameters.
+    Info(cmd::info::Args),
+    /// Decode a clip with the no_std decoder and measure it against its source.
+    Eval(cmd::eval::Args),
+    /// Rate–distortion table over files or folders of BVH.
+    Bench(cmd::bench::Args),
+    /// Play a clip through a servo rig: servo-controller commands to a port or a file.
+    Play(cmd::play::Args),
+    /// Stream a clip to the firmware's streaming mode (postcard + COBS + CRC frames).
+    ///
+    /// Writes a `00` and `Hello`, then either the clip in 64-byte `ClipChunk`s and `Play`
+    /// (the firmware plays it from its RAM), repeated `--passes` times, or with `--poses` one
+    /// `Pose` per servo tick of a servo clip, decoded here at the rig's rate (`seq` = tick
+    /// number; the firmware holds the last pose over lost ones), then `Stop`. See SPEC.md §8.
+    Send(cmd::send::Args),
+    /// Motion Track picture (Hu et al. 2010): clips as curves in a 2-D map of key poses.
+    Track(cmd::track::Args),
+    /// Write the procedural demo clip the project ships.
+    Generate(cmd::generate::Args),
+}
+
+fn run(cli: Cli) -> cmd::Result {
+    match cli.command {
+        Command::Encode(a) => cmd::encode::run(a),
+        Command::Decode(a) => cmd::decode::run(a),
+        Command::Info(a) => cmd::info::run(a),
+        Command::Eval(a) => cmd::eval::run(a),
+        Command::Bench(a) => cmd::bench::run(a),
+        Command::Play(a) => cmd::play::run(a),
+        Command::Send(a) => cmd::send::run(a),
+        Command::Track(a) => cmd::track::run(a),
+        Command::Generate(a) => cmd::generate::run(a),
+    }
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("mocap: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,105 @@
+//! The `mocap` binary end to end on the shipped demo clip: each subcommand
+//! runs, writes what it says, and prints the library's errors as
+//! `mocap: error: …` with the messages users read.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mocap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mocap"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .output()
+        .expect("run mocap")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+#[test]
+fn encode_info_eval_decode_the_demo() {
+    let d = out_dir("demo");
+    let clip = d.join("demo.mcb");
+    let clip = clip.to_str().expect("utf-8 path");
+    let o = mocap(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "-o",
+        clip,
+        "--emit",
+        "rust",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let shipped = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../firmware-example/clips/demo.mcb"
+    ))
+    .expect("shipped clip");
+    assert_eq!(std::fs::read(clip).expect("clip"), shipped);
+    assert!(text(&o.stdout).contains("(bound 1° holds; index, key interval"));
+    assert!(d.join("demo.rs").exists());
+
+    let o = mocap(&["info", clip, "--channels"]);
+    assert!(o.status.success());
+    let info = text(&o.stdout);
+    assert!(info.starts_with(&format!("clip: {} bytes, version 1,", shipped.len())));
+    assert!(info.contains("  index codec: key interval"), "{info}");
+
+    let o = mocap(&["eval", "assets/animatronic_demo.bvh", clip, "--json"]);
+    assert!(o.status.success());
+    assert!(text(&o.stdout).starts_with('{'));
+
+    let bvh = d.join("back.bvh");
+    let o = mocap(&["decode", clip, "-o", bvh.to_str().expect("utf-8 path")]);
+    assert!(o.status.success());
+    assert!(text(&std::fs::read(bvh).expect("bvh")).starts_with("HIERARCHY"));
+}
+
+#[test]
+fn errors_read_as_before() {
+    let o = mocap(&[
+        "encode",
+        "--max-error",
+        "1q",
+        "assets/animatronic_demo.bvh",
+        "-o",
+        "x.mcb",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o.stderr).contains("error bound '1q': unit 'q' is not deg, mm or cm"));
+
+    let o = mocap(&["bench", "assets/animatronic_demo.bvh", "--max-error", "1q"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        text(&o.stderr),
+        "mocap: error: error bound '1q': unit 'q' is not deg, mm or cm\n"
+    );
+
+    let o = mocap(&["encode", "/nonexistent.bvh", "-o", "x.mcb"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o.stderr).starts_with("mocap: error: /nonexistent.bvh:0:0: cannot read file: "));
+
+    let d = out_dir("errors");
+    let s = d.join("s.mcb");
+    let o = mocap(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "--rig",
+        "assets/rigs/animatronic_demo.toml",
+        "--max-error",
+        "5mm",
+        "-o",
+        s.to_str().expect("utf-8 path"),
+    ]);
+    assert_eq!(
+        text(&o.stderr),
+        "mocap: error: a servo clip's bound is in degrees of servo travel (e.g. --max-error 0.5deg)\n"
+    );
+}

@@ -1,0 +1,200 @@
+//! The error bound: `--max-error` values ([`BoundSpec`]), their merge
+//! ([`Bound`]) and the per-channel tolerances a bound gives the codecs that
+//! work from tolerances.
+
+use std::fmt;
+use std::str::FromStr;
+
+use super::EncodeOptions;
+use crate::fixed::{FixedChannels, MDEG_PER_DEG};
+use crate::metrics::Metrics;
+
+/// A `--max-error` value that does not parse.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BoundError {
+    /// No unit after the number.
+    #[error("error bound '{0}' needs a unit: e.g. 1deg or 8mm")]
+    NoUnit(String),
+    /// The number does not parse.
+    #[error("error bound '{spec}': '{number}' is not a number")]
+    NotANumber {
+        /// The value as given.
+        spec: String,
+        /// Its number part.
+        number: String,
+    },
+    /// Zero, negative or not finite.
+    #[error("error bound '{0}' must be a positive number")]
+    NotPositive(String),
+    /// A unit other than deg, mm or cm.
+    #[error("error bound '{spec}': unit '{unit}' is not deg, mm or cm")]
+    UnknownUnit {
+        /// The value as given.
+        spec: String,
+        /// Its unit.
+        unit: String,
+    },
+    /// `arms:` followed by an angle.
+    #[error("error bound '{0}': ARMS is a length, e.g. arms:10mm")]
+    ArmsNotLength(String),
+}
+
+/// One error bound: degrees on rotation channels or millimetres on joint
+/// positions (`1deg`, `0.25deg`, `8mm`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BoundSpec {
+    /// Max wrap-aware error of every rotation channel, degrees.
+    Degrees(f64),
+    /// Max joint-position error (forward kinematics), millimetres.
+    Millimetres(f64),
+    /// Mean over frames of the RMS joint-position error (ARMS),
+    /// millimetres: `arms:10mm`.
+    Arms(f64),
+}
+
+impl FromStr for BoundSpec {
+    type Err = BoundError;
+
+    fn from_str(s: &str) -> Result<Self, BoundError> {
+        let t = s.trim();
+        if let Some(rest) = t.strip_prefix("arms:") {
+            return match rest.parse::<BoundSpec>()? {
+                BoundSpec::Millimetres(mm) => Ok(BoundSpec::Arms(mm)),
+                _ => Err(BoundError::ArmsNotLength(s.to_string())),
+            };
+        }
+        let (num, unit) = t
+            .find(|c: char| c.is_ascii_alphabetic())
+            .map(|i| t.split_at(i))
+            .ok_or_else(|| BoundError::NoUnit(s.to_string()))?;
+        let v: f64 = num.trim().parse().map_err(|_| BoundError::NotANumber {
+            spec: s.to_string(),
+            number: num.to_string(),
+        })?;
+        if !(v.is_finite() && v > 0.0) {
+            return Err(BoundError::NotPositive(s.to_string()));
+        }
+        match unit {
+            "deg" | "°" => Ok(BoundSpec::Degrees(v)),
+            "mm" => Ok(BoundSpec::Millimetres(v)),
+            "cm" => Ok(BoundSpec::Millimetres(v * 10.0)),
+            _ => Err(BoundError::UnknownUnit {
+                spec: s.to_string(),
+                unit: unit.to_string(),
+            }),
+        }
+    }
+}
+
+/// The combined bound of one encode.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bound {
+    /// Rotation channels, degrees.
+    pub angle_deg: Option<f64>,
+    /// Joint positions, millimetres.
+    pub position_mm: Option<f64>,
+    /// ARMS of joint positions, millimetres.
+    pub arms_mm: Option<f64>,
+}
+
+impl Bound {
+    /// Translation channels keep this accuracy (mm) when only an angle bound
+    /// is given.
+    pub const DEFAULT_TRANSLATION_MM: f64 = 1.0;
+
+    /// Merges several `--max-error` values (the tightest of each kind wins).
+    pub fn from_specs(specs: &[BoundSpec]) -> Bound {
+        let mut b = Bound {
+            angle_deg: None,
+            position_mm: None,
+            arms_mm: None,
+        };
+        for s in specs {
+            match *s {
+                BoundSpec::Degrees(d) => b.angle_deg = Some(b.angle_deg.map_or(d, |x| x.min(d))),
+                BoundSpec::Millimetres(m) => {
+                    b.position_mm = Some(b.position_mm.map_or(m, |x| x.min(m)))
+                }
+                BoundSpec::Arms(m) => b.arms_mm = Some(b.arms_mm.map_or(m, |x| x.min(m))),
+            }
+        }
+        b
+    }
+
+    /// True if measured metrics meet the bound.
+    pub fn holds(&self, m: &Metrics) -> bool {
+        self.angle_deg.is_none_or(|d| m.angle_max_deg <= d)
+            && self.position_mm.is_none_or(|p| m.max_joint_err_mm <= p)
+            && self.arms_mm.is_none_or(|p| m.arms_mm <= p)
+            && (self.positional() || m.position_max_mm <= Self::DEFAULT_TRANSLATION_MM)
+    }
+
+    /// True if a bound is on joint positions (max or ARMS).
+    pub fn positional(&self) -> bool {
+        self.position_mm.is_some() || self.arms_mm.is_some()
+    }
+}
+
+impl fmt::Display for Bound {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut parts = Vec::new();
+        if let Some(a) = self.angle_deg {
+            parts.push(format!("{a}°"));
+        }
+        if let Some(p) = self.position_mm {
+            parts.push(format!("{p} mm"));
+        }
+        if let Some(p) = self.arms_mm {
+            parts.push(format!("ARMS {p} mm"));
+        }
+        if parts.is_empty() {
+            f.write_str("none")
+        } else {
+            f.write_str(&parts.join(" and "))
+        }
+    }
+}
+
+/// Per-channel tolerances (fixed-point units) for a position budget scale
+/// `s_um` (µm; `None` = no position bound).
+pub(super) fn tolerances(
+    fixed: &FixedChannels,
+    opts: &EncodeOptions,
+    levers_um: &[f64],
+    joint_of: &[usize],
+    s_um: Option<f64>,
+    tighten: f64,
+) -> Vec<i64> {
+    fixed
+        .kinds
+        .iter()
+        .enumerate()
+        .map(|(c, kind)| {
+            let mut tol = f64::INFINITY;
+            if kind.is_rotation() {
+                if let Some(d) = opts.bound.angle_deg {
+                    // Half a millidegree is lost to rounding the input.
+                    tol = tol.min(d * MDEG_PER_DEG - 1.0);
+                }
+                if let Some(s) = s_um {
+                    let lever = levers_um[joint_of[c]];
+                    if lever > 0.0 {
+                        tol = tol.min((s / lever).to_degrees() * MDEG_PER_DEG);
+                    }
+                }
+            } else {
+                match s_um {
+                    Some(s) => tol = tol.min(s),
+                    None => tol = tol.min(Bound::DEFAULT_TRANSLATION_MM * 1000.0 - 1.0),
+                }
+            }
+            let t = (tol * tighten).floor();
+            if t.is_finite() {
+                t.max(0.0) as i64
+            } else {
+                i64::from(i32::MAX)
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,273 @@
+//! The searches: for each codec the coarsest setting whose proven clip
+//! still meets the bound — tightening or bisecting per-channel tolerances
+//! (`index`, `predictive`), bisecting the weighted tolerance `τ`
+//! (`pca-spline`).
+
+use mocap_decoder::consts;
+
+use super::bound::tolerances;
+use super::proof::{prove, Attempt};
+use super::{Bound, CodecChoice, EncodeError, EncodeOptions, Encoded};
+use crate::codec::{index, pca_spline, predictive};
+use crate::fixed::FixedChannels;
+use crate::motion::Motion;
+
+/// What every codec's search starts from, computed once per encode.
+pub(super) struct Prepared {
+    /// The motion in fixed point.
+    pub fixed: FixedChannels,
+    /// Joint positions of the input, mm (`[joint][xyz]` per frame).
+    pub original_mm: Vec<[f64; 3]>,
+    /// Lever arm of each joint, µm.
+    pub levers_um: Vec<f64>,
+    /// Joint of each channel.
+    pub joint_of: Vec<usize>,
+}
+
+fn attempt(
+    m: &Motion,
+    fixed: &FixedChannels,
+    tol: &[i64],
+    opts: &EncodeOptions,
+    original_mm: &[[f64; 3]],
+) -> Result<Attempt, EncodeError> {
+    if opts.codec == CodecChoice::Predictive {
+        let block = match opts.key_interval {
+            Some(k) => u32::from(k.max(1)),
+            None => ((predictive::DEFAULT_BLOCK_SECONDS / m.frame_time).round() as u32).max(1),
+        };
+        let enc = predictive::encode(&fixed.values, tol, block)?;
+        let expected = FixedChannels {
+            kinds: fixed.kinds.clone(),
+            values: enc.decoded,
+        };
+        let mut a = prove(
+            m,
+            fixed,
+            (consts::SECTION_CODEC_PREDICTIVE, enc.section),
+            Some(&expected),
+            opts,
+            original_mm,
+        )?;
+        a.key_interval = block.min(u32::from(u16::MAX)) as u16;
+        return Ok(a);
+    }
+    let intervals: Vec<u16> = match opts.key_interval {
+        Some(k) => vec![k],
+        None => index::KEY_INTERVALS.to_vec(),
+    };
+    let enc = index::encode(&fixed.values, tol, &intervals).map_err(|e| {
+        EncodeError::ToleranceTooTight {
+            channel: e.channel,
+            name: m.skeleton.channel_names()[e.channel].clone(),
+        }
+    })?;
+    let expected = FixedChannels {
+        kinds: fixed.kinds.clone(),
+        values: enc.decoded(),
+    };
+    let mut a = prove(
+        m,
+        fixed,
+        (consts::SECTION_CODEC_INDEX, enc.to_section()?),
+        Some(&expected),
+        opts,
+        original_mm,
+    )?;
+    a.key_interval = enc.key_interval;
+    Ok(a)
+}
+
+/// A log-bisection for the largest parameter in `[lo, hi]` whose attempt
+/// meets the bound (size falls as the parameter grows): at most `steps`
+/// rounds, stopping once `hi / lo < ratio`. Returns the smallest holding
+/// attempt seen (if any), the largest holding parameter found (`lo`) and
+/// the attempts made.
+fn bisect(
+    bound: &Bound,
+    (mut lo, mut hi): (f64, f64),
+    steps: usize,
+    ratio: f64,
+    mut run: impl FnMut(f64) -> Result<Attempt, EncodeError>,
+) -> Result<(Option<Attempt>, f64, usize), EncodeError> {
+    let mut best: Option<Attempt> = None;
+    let mut attempts = 0;
+    for _ in 0..steps {
+        attempts += 1;
+        let x = (lo * hi).sqrt();
+        let a = run(x)?;
+        if bound.holds(&a.metrics) {
+            lo = x;
+            if best.as_ref().is_none_or(|b| a.bytes.len() <= b.bytes.len()) {
+                best = Some(a);
+            }
+        } else {
+            hi = x;
+        }
+        if hi / lo < ratio {
+            break;
+        }
+    }
+    Ok((best, lo, attempts))
+}
+
+/// Encodes with `pca-spline`, searching the tolerance `τ` (log-bisection)
+/// for the smallest clip whose decoded output meets the bound.
+pub(super) fn encode_pca(
+    m: &Motion,
+    input: &Prepared,
+    opts: &EncodeOptions,
+) -> Result<Encoded, EncodeError> {
+    let Prepared {
+        fixed,
+        original_mm,
+        levers_um,
+        joint_of,
+    } = input;
+    let mm = opts.bound.positional();
+    let weights = pca_spline::pca_weights(
+        m,
+        levers_um,
+        joint_of,
+        &fixed.kinds,
+        mm,
+        opts.bound.arms_mm.is_some(),
+    );
+    let groups = pca_spline::pca_groups(m, 9);
+    let input = pca_spline::Input {
+        values: &fixed.values,
+        weights: &weights,
+        groups: &groups,
+    };
+    let scale = match (
+        opts.bound.position_mm.or(opts.bound.arms_mm),
+        opts.bound.angle_deg,
+    ) {
+        (Some(p), _) => p,
+        (None, Some(d)) => d,
+        (None, None) => Bound::DEFAULT_TRANSLATION_MM,
+    };
+    let fps = 1.0 / m.frame_time;
+    let run = |tau: f64| -> Result<Attempt, EncodeError> {
+        let params = pca_spline::Params::new(tau, fps);
+        let mut model = pca_spline::model(&input, &params)?;
+        let try_model = |model: &pca_spline::Model| {
+            let section = model.to_section(fixed.kinds.len());
+            prove(
+                m,
+                fixed,
+                (consts::SECTION_CODEC_PCA_SPLINE, section),
+                None,
+                opts,
+                original_mm,
+            )
+        };
+        let first = try_model(&model)?;
+        // What the smooth model misses by more than τ (glitches, spikes)
+        // becomes sparse patches.
+        if model.add_patches(&input, &first.decoded, params.patch_share * tau) == 0 {
+            return Ok(first);
+        }
+        try_model(&model)
+    };
+    let (mut best, lo, mut attempts) =
+        bisect(&opts.bound, (scale / 256.0, scale * 2.0), 20, 1.02, run)?;
+    // Size and error are not quite monotonic in τ: probe a little above
+    // the boundary too and keep the smallest clip that holds.
+    for i in 1..=6 {
+        attempts += 1;
+        let a = run(lo * (1.0 + 0.03 * i as f64))?;
+        if opts.bound.holds(&a.metrics)
+            && best.as_ref().is_none_or(|b| a.bytes.len() < b.bytes.len())
+        {
+            best = Some(a);
+        }
+    }
+    let best = match best {
+        Some(b) => b,
+        None => {
+            attempts += 1;
+            let a = run(lo)?;
+            if !opts.bound.holds(&a.metrics) {
+                return Err(EncodeError::PcaBoundNotMet {
+                    bound: opts.bound,
+                    max_joint_err_mm: a.metrics.max_joint_err_mm,
+                    angle_max_deg: a.metrics.angle_max_deg,
+                });
+            }
+            a
+        }
+    };
+    Ok(Encoded {
+        bytes: best.bytes,
+        metrics: best.metrics,
+        codec: CodecChoice::PcaSpline,
+        key_interval: 0,
+        attempts,
+    })
+}
+
+/// Encodes with a codec driven by per-channel tolerances (`index`,
+/// `predictive`): tightens an angle bound, or bisects the position budget
+/// of a millimetre bound, until the decoded clip meets the bound.
+pub(super) fn encode_by_tolerance(
+    m: &Motion,
+    input: &Prepared,
+    opts: &EncodeOptions,
+) -> Result<Encoded, EncodeError> {
+    let Prepared {
+        fixed,
+        original_mm,
+        levers_um,
+        joint_of,
+    } = input;
+    let mut attempts = 0;
+    let mut tighten = 1.0;
+    let run = |s_um: Option<f64>, tighten: f64| {
+        let tol = tolerances(fixed, opts, levers_um, joint_of, s_um, tighten);
+        attempt(m, fixed, &tol, opts, original_mm)
+    };
+    let best = match opts.bound.position_mm {
+        None => loop {
+            attempts += 1;
+            let a = run(None, tighten)?;
+            if opts.bound.holds(&a.metrics) {
+                break a;
+            }
+            if attempts >= 8 {
+                return Err(EncodeError::BoundNotMetAfter {
+                    bound: opts.bound,
+                    attempts,
+                });
+            }
+            tighten *= 0.8;
+        },
+        Some(p) => {
+            // Bisect the position budget: errors of every joint up the chain
+            // add up, so the budget per channel is a fraction of the bound.
+            let bound_um = p * 1000.0;
+            let (best, lo, n) = bisect(&opts.bound, (bound_um * 1e-3, bound_um), 14, 1.03, |s| {
+                run(Some(s), 1.0)
+            })?;
+            attempts += n;
+            match best {
+                Some(b) => b,
+                None => {
+                    attempts += 1;
+                    let a = run(Some(lo), 1.0)?;
+                    if !opts.bound.holds(&a.metrics) {
+                        return Err(EncodeError::BoundNotMet { bound: opts.bound });
+                    }
+                    a
+                }
+            }
+        }
+    };
+    Ok(Encoded {
+        bytes: best.bytes,
+        metrics: best.metrics,
+        codec: opts.codec,
+        key_interval: best.key_interval,
+        attempts,
+    })
+}

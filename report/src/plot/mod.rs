@@ -1,0 +1,258 @@
+//! Plots users want beside the tables: the rate–distortion plot of
+//! `mocap bench --plot` and the per-frame error plot of `mocap eval --plot`.
+//! plotters, SVG or PNG by the file's extension; text uses the font bundled
+//! by [`style::register_font`] (no system font library).
+
+pub mod style;
+
+use std::path::{Path, PathBuf};
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::bench::Row;
+use mocap_encoder::metrics::positions_mm;
+use mocap_encoder::motion::Motion;
+use style::{register_font, PALETTE};
+
+/// A picture that could not be drawn or written.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct PlotError {
+    /// The picture's file.
+    pub path: PathBuf,
+    /// What plotters reported.
+    pub message: String,
+}
+
+/// Per-frame joint-position error of `decoded` against `original` (same
+/// skeleton), millimetres: `(rms over joints, max over joints)` per frame.
+/// The mean of the first components is the ARMS of [`mocap_encoder::metrics::compare`].
+pub fn per_frame_errors(
+    original: &Motion,
+    decoded: &Motion,
+    metres_per_unit: f64,
+) -> Vec<(f64, f64)> {
+    let frames = original.frames().min(decoded.frames());
+    let joints = original.skeleton.joints.len().max(1);
+    let a = positions_mm(original, metres_per_unit);
+    let b = positions_mm(decoded, metres_per_unit);
+    (0..frames)
+        .map(|f| {
+            let (mut sq, mut max) = (0.0, 0.0f64);
+            for j in 0..joints {
+                let (p, q) = (a[f * joints + j], b[f * joints + j]);
+                let d2: f64 = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum();
+                sq += d2;
+                max = max.max(d2.sqrt());
+            }
+            ((sq / joints as f64).sqrt(), max)
+        })
+        .collect()
+}
+
+fn is_svg(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
+}
+
+fn with_backend(
+    path: &Path,
+    size: (u32, u32),
+    f: impl Fn(DrawingArea<SVGBackend, Shift>) -> Result<(), String>,
+    g: impl Fn(DrawingArea<BitMapBackend, Shift>) -> Result<(), String>,
+) -> Result<(), PlotError> {
+    register_font();
+    let r = if is_svg(path) {
+        f(SVGBackend::new(path, size).into_drawing_area())
+    } else {
+        g(BitMapBackend::new(path, size).into_drawing_area())
+    };
+    r.map_err(|message| PlotError {
+        path: path.to_path_buf(),
+        message,
+    })
+}
+
+/// `mocap eval --plot`: RMS and max joint error per frame.
+pub fn frame_error_plot(
+    path: &Path,
+    original: &Motion,
+    decoded: &Motion,
+    metres_per_unit: f64,
+    name: &str,
+) -> Result<(), PlotError> {
+    let errs = per_frame_errors(original, decoded, metres_per_unit);
+    let dt = original.frame_time;
+    let name = Path::new(name)
+        .file_name()
+        .map_or(name.to_string(), |n| n.to_string_lossy().into_owned());
+    let name = name.as_str();
+    with_backend(
+        path,
+        (1200, 500),
+        |a| draw_frame_errors(a, &errs, dt, name),
+        |a| draw_frame_errors(a, &errs, dt, name),
+    )
+}
+
+fn draw_frame_errors<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    errs: &[(f64, f64)],
+    dt: f64,
+    name: &str,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let t1 = (errs.len().max(2) - 1) as f64 * dt;
+    let ymax = errs.iter().map(|x| x.1).fold(0.0, f64::max).max(1e-6) * 1.1;
+    let arms = errs.iter().map(|x| x.0).sum::<f64>() / errs.len().max(1) as f64;
+    let mut chart = ChartBuilder::on(&root)
+        .margin(15)
+        .caption(
+            format!("{name}: joint-position error per frame (ARMS {arms:.2} mm)"),
+            ("sans-serif", 18),
+        )
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t1, 0.0..ymax)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc("error (mm)")
+        .label_style(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    type Pick = fn(&(f64, f64)) -> f64;
+    let series: [(&str, RGBColor, Pick); 2] = [
+        ("max over joints", PALETTE[3], |x| x.1),
+        ("RMS over joints", PALETTE[0], |x| x.0),
+    ];
+    for (label, colour, pick) in series {
+        chart
+            .draw_series(LineSeries::new(
+                errs.iter()
+                    .enumerate()
+                    .map(|(i, x)| (i as f64 * dt, pick(x))),
+                colour.stroke_width(1),
+            ))
+            .map_err(e)?
+            .label(label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 16))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// `mocap bench --plot`: compression ratio (vs 32-bit floats) against ARMS,
+/// one colour per codec and bound, one point per file, and a grey line per
+/// file joining its bounds.
+pub fn rate_distortion_plot(path: &Path, rows: &[Row]) -> Result<(), PlotError> {
+    with_backend(
+        path,
+        (1000, 700),
+        |a| draw_rd(a, rows),
+        |a| draw_rd(a, rows),
+    )
+}
+
+fn draw_rd<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, rows: &[Row]) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let xmax = rows
+        .iter()
+        .map(|r| r.metrics.arms_mm)
+        .fold(0.0, f64::max)
+        .max(1e-6)
+        * 1.1;
+    let ymax = rows
+        .iter()
+        .map(|r| r.metrics.ratio_f32)
+        .fold(0.0, f64::max)
+        .max(1.0)
+        * 1.1;
+    let mut chart = ChartBuilder::on(&root)
+        .margin(15)
+        .caption(
+            "rate–distortion: ratio vs 32-bit floats against ARMS",
+            ("sans-serif", 18),
+        )
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..xmax, 0.0..ymax)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("ARMS (mm)")
+        .y_desc("compression ratio (f32 / clip bytes)")
+        .label_style(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    // One grey line per file through its bounds (sorted by ARMS).
+    let mut files: Vec<(&str, &str)> = rows
+        .iter()
+        .map(|r| (r.group.as_str(), r.file.as_str()))
+        .collect();
+    files.sort();
+    files.dedup();
+    for (g, f) in &files {
+        let mut pts: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.group == *g && r.file == *f)
+            .map(|r| (r.metrics.arms_mm, r.metrics.ratio_f32))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                pts,
+                RGBColor(190, 190, 190).stroke_width(1),
+            )))
+            .map_err(e)?;
+    }
+    // One series per codec and bound (the index codec is the only one today).
+    let mut bounds: Vec<&str> = Vec::new();
+    for r in rows {
+        if !bounds.contains(&r.bound.as_str()) {
+            bounds.push(&r.bound);
+        }
+    }
+    for (i, b) in bounds.iter().enumerate() {
+        let colour = PALETTE[i % PALETTE.len()];
+        chart
+            .draw_series(
+                rows.iter().filter(|r| r.bound == *b).map(|r| {
+                    Circle::new((r.metrics.arms_mm, r.metrics.ratio_f32), 4, colour.filled())
+                }),
+            )
+            .map_err(e)?
+            .label(format!("index @ {b}"))
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 16))
+        .position(SeriesLabelPosition::LowerRight)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
+    Ok(())
+}

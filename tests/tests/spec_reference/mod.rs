@@ -1,0 +1,850 @@
+//! A reference decoder written from SPEC.md's prose alone — the container
+//! (§2), the header in both forms (§3.1, §3.4), `index` (§4), `pca-spline`
+//! (§5) and `predictive` (§5b) — sharing no code with `mocap-decoder` or
+//! `mocap-encoder`. The
+//! spec examples are decoded with it and with the real decoder; both must
+//! give the values SPEC.md states. Written for clarity, not speed: it
+//! panics on anything malformed (the examples are valid clips).
+
+/// A parsed clip: what the codecs need of the header, and the codec section.
+pub struct Clip {
+    pub frame_time_ns: u32,
+    pub frame_count: u32,
+    pub channels: usize,
+    pub codec: Codec,
+}
+
+pub enum Codec {
+    Index(Index),
+    PcaSpline(Pca),
+    Predictive(Predictive),
+}
+
+/// §2: preamble, section table, CRC; §3.1 / §3.4: the header's counts.
+pub fn parse(bytes: &[u8]) -> Clip {
+    assert_eq!(&bytes[..4], b"MOCB", "magic");
+    assert_eq!(bytes[4..6], [1, 0], "version 1, flags 0");
+    let n = usize::from(u16::from_le_bytes([bytes[6], bytes[7]]));
+    let (body, crc) = bytes.split_at(bytes.len() - 4);
+    assert_eq!(
+        u32::from_le_bytes(crc.try_into().unwrap()),
+        crc32(body),
+        "CRC"
+    );
+    let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+    let mut header = None;
+    let mut codec = None;
+    for e in 0..n {
+        let entry = 8 + 12 * e;
+        assert_eq!(bytes[entry + 1..entry + 4], [0, 0, 0], "reserved");
+        let (offset, len) = (u32_at(entry + 4), u32_at(entry + 8));
+        let section = &bytes[offset..offset + len];
+        match bytes[entry] {
+            id @ (0x01 | 0x02) => header = Some((id, section)),
+            id @ (0x10..=0x12) => codec = Some((id, section)),
+            id => panic!("the reference reads no section {id:#04x}"),
+        }
+    }
+    let (header_id, header) = header.expect("a header");
+    let mut r = Reader::new(header);
+    let mut frame_time_ns = r.varint();
+    let (frame_count, channels);
+    if header_id == 0x01 {
+        // §3.1: postcard.
+        frame_count = r.varint();
+        let _source_unit_nm = r.varint();
+        let joints = r.varint();
+        let mut kinds = 0;
+        for _ in 0..joints {
+            let name = r.varint() as usize;
+            r.take(name);
+            match r.u8() {
+                0 => {}
+                1 => {
+                    r.varint();
+                }
+                b => panic!("option byte {b}"),
+            }
+            for _ in 0..3 {
+                r.zigzag();
+            }
+            assert!(r.u8() <= 1, "bool");
+            let n = r.varint() as usize;
+            r.take(n);
+            kinds += n;
+        }
+        channels = r.varint() as usize;
+        assert_eq!(channels, kinds, "one channel per kind");
+        for _ in 0..channels {
+            r.u8();
+            let (min, max) = (r.zigzag(), r.zigzag());
+            assert!(min <= max);
+        }
+    } else if frame_time_ns == 0 {
+        // §3.4.1 servo form.
+        frame_time_ns = r.varint();
+        frame_count = r.varint();
+        channels = r.varint() as usize;
+    } else {
+        frame_count = r.varint();
+        let _source_unit_nm = r.varint();
+        let joints = r.varint();
+        let mut c = 0;
+        for _ in 0..joints {
+            let flags = r.u8();
+            let kinds = usize::from(flags & 7);
+            if flags & 0x10 != 0 {
+                r.varint(); // back
+            }
+            let name = r.varint() as usize;
+            r.take(name);
+            for _ in 0..3 {
+                r.zigzag();
+            }
+            r.take(kinds);
+            c += kinds;
+        }
+        for _ in 0..c {
+            r.zigzag();
+            r.varint();
+        }
+        channels = c;
+    }
+    assert!(r.done(), "header trailing bytes");
+    let (id, section) = codec.expect("a codec section");
+    let codec = match id {
+        0x10 => Codec::Index(Index::parse(section, channels)),
+        0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
+        _ => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
+    };
+    Clip {
+        frame_time_ns,
+        frame_count,
+        channels,
+        codec,
+    }
+}
+
+impl Clip {
+    /// Every frame, `[frame][channel]`.
+    pub fn frames(&self) -> Vec<Vec<i32>> {
+        match &self.codec {
+            Codec::PcaSpline(p) => (0..self.frame_count)
+                .map(|i| p.pose(u64::from(i) << 16, self.channels))
+                .collect(),
+            Codec::Predictive(p) => p.decode(self.channels, self.frame_count),
+            Codec::Index(x) => x.decode(self.channels, self.frame_count),
+        }
+    }
+
+    /// `sample_at(t_us)`: §5.4's position for `pca-spline`, §6's linear
+    /// interpolation for `predictive`.
+    pub fn sample_at(&self, t_us: u64) -> Vec<i32> {
+        let ns = t_us.saturating_mul(1000);
+        let ft = u64::from(self.frame_time_ns);
+        let i = ns / ft;
+        let frac = ((ns % ft) << 16) / ft;
+        let last = u64::from(self.frame_count - 1);
+        match &self.codec {
+            Codec::PcaSpline(p) => {
+                let pos = if i >= last {
+                    last << 16
+                } else {
+                    (i << 16) | frac
+                };
+                p.pose(pos, self.channels)
+            }
+            Codec::Predictive(_) | Codec::Index(_) => {
+                let frames = self.frames();
+                if i >= last {
+                    return frames[last as usize].clone();
+                }
+                let (a, b) = (&frames[i as usize], &frames[i as usize + 1]);
+                a.iter()
+                    .zip(b)
+                    .map(|(&a, &b)| {
+                        let d = i64::from(b.wrapping_sub(a));
+                        a.wrapping_add(((d * frac as i64) >> 16) as i32)
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// CRC-32/ISO-HDLC, bit by bit (§2.3).
+pub fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = u32::MAX;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// Bytes in order: postcard varints and zigzag (§3.1), little-endian fixed
+/// widths, and LSB-first bit fields (§4.4).
+pub struct Reader<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Reader<'a> {
+    pub fn new(bytes: &'a [u8]) -> Self {
+        Reader { bytes, pos: 0 }
+    }
+
+    pub fn done(&self) -> bool {
+        self.pos == self.bytes.len()
+    }
+
+    pub fn u8(&mut self) -> u8 {
+        let b = self.bytes[self.pos];
+        self.pos += 1;
+        b
+    }
+
+    pub fn take(&mut self, n: usize) -> &'a [u8] {
+        let s = &self.bytes[self.pos..self.pos + n];
+        self.pos += n;
+        s
+    }
+
+    pub fn varint(&mut self) -> u32 {
+        let mut v: u64 = 0;
+        for i in 0..5 {
+            let b = self.u8();
+            v |= u64::from(b & 0x7F) << (7 * i);
+            if b & 0x80 == 0 {
+                return u32::try_from(v).expect("varint fits 32 bits");
+            }
+        }
+        panic!("varint longer than 5 bytes")
+    }
+
+    pub fn zigzag(&mut self) -> i32 {
+        let v = self.varint();
+        ((v >> 1) as i32) ^ -((v & 1) as i32)
+    }
+}
+
+/// LSB-first bits (§4.4): bit `p` is bit `p mod 8` of byte `p div 8`, a
+/// field's bit 0 first.
+struct Bits<'a> {
+    bytes: &'a [u8],
+    bit: usize,
+}
+
+impl Bits<'_> {
+    fn read(&mut self, width: u32) -> u32 {
+        let mut v = 0u32;
+        for i in 0..width {
+            let p = self.bit + i as usize;
+            v |= u32::from((self.bytes[p / 8] >> (p % 8)) & 1) << i;
+        }
+        self.bit += width as usize;
+        v
+    }
+}
+
+// ---------------------------------------------------------------- §4
+
+#[derive(Debug)]
+pub struct Index {
+    pub key_interval: u32,
+    pub key_set: Vec<IndexGroup>,
+    pub delta_set: Vec<IndexGroup>,
+    pub pool: Vec<i32>,
+    pub payload: Vec<u8>,
+}
+
+/// A group of a set: `(bits, shift, accumulate)` and its entries
+/// `(channel, table, base)`.
+#[derive(Debug)]
+pub struct IndexGroup {
+    pub bits: u32,
+    pub shift: u32,
+    pub accumulate: bool,
+    pub entries: Vec<(usize, usize, i32)>,
+}
+
+impl Index {
+    /// §4.1, §4.2.
+    pub fn parse(section: &[u8], channels: usize) -> Index {
+        let mut r = Reader::new(section);
+        let u16_le = |r: &mut Reader<'_>| u16::from_le_bytes([r.u8(), r.u8()]);
+        let key_interval = u32::from(u16_le(&mut r));
+        assert_eq!(usize::from(u16_le(&mut r)), channels);
+        let t = u32::from_le_bytes(r.take(4).try_into().unwrap()) as usize;
+        let set = |r: &mut Reader<'_>| -> Vec<IndexGroup> {
+            let groups = u16_le(r);
+            (0..groups)
+                .map(|_| {
+                    let bits = u32::from(r.u8());
+                    let flags = r.u8();
+                    assert!(bits <= 12 && flags & 0x60 == 0 && u32::from(flags & 0x1F) <= 24);
+                    let count = u16_le(r);
+                    let entries = (0..count)
+                        .map(|_| {
+                            let channel = usize::from(u16_le(r));
+                            let table = usize::from(u16_le(r));
+                            let base = i32::from_le_bytes(r.take(4).try_into().unwrap());
+                            assert!(channel < channels && table + (1 << bits) <= t);
+                            (channel, table, base)
+                        })
+                        .collect();
+                    IndexGroup {
+                        bits,
+                        shift: u32::from(flags & 0x1F),
+                        accumulate: flags & 0x80 != 0,
+                        entries,
+                    }
+                })
+                .collect()
+        };
+        let key_set = set(&mut r);
+        assert!(key_set.iter().all(|g| !g.accumulate));
+        let delta_set = if key_interval > 0 {
+            set(&mut r)
+        } else {
+            Vec::new()
+        };
+        let pool = (0..t)
+            .map(|_| i32::from(i16::from_le_bytes([r.u8(), r.u8()])))
+            .collect();
+        let payload = r.bytes[r.pos..].to_vec();
+        Index {
+            key_interval,
+            key_set,
+            delta_set,
+            pool,
+            payload,
+        }
+    }
+
+    /// §4.3, §4.4: every frame, in order.
+    pub fn decode(&self, channels: usize, frames: u32) -> Vec<Vec<i32>> {
+        let bits_of = |set: &[IndexGroup]| -> usize {
+            set.iter().map(|g| g.bits as usize * g.entries.len()).sum()
+        };
+        let (kb, db) = (bits_of(&self.key_set), bits_of(&self.delta_set));
+        let k = self.key_interval as usize;
+        let keys = |f: usize| if k == 0 { f } else { f.div_ceil(k) };
+        let start = |f: usize| keys(f) * kb + (f - keys(f)) * db;
+        assert_eq!(self.payload.len(), start(frames as usize).div_ceil(8));
+        let mut bits = Bits {
+            bytes: &self.payload,
+            bit: 0,
+        };
+        let mut value = vec![0i32; channels];
+        let mut out = Vec::new();
+        for f in 0..frames as usize {
+            assert_eq!(bits.bit, start(f), "records back to back");
+            let key = k == 0 || f % k == 0;
+            if key {
+                value.fill(0);
+            }
+            let set = if key { &self.key_set } else { &self.delta_set };
+            for g in set {
+                for &(c, table, base) in &g.entries {
+                    let i = bits.read(g.bits) as usize;
+                    let v = base.wrapping_add(self.pool[table + i].wrapping_shl(g.shift));
+                    value[c] = if g.accumulate {
+                        value[c].wrapping_add(v)
+                    } else {
+                        v
+                    };
+                }
+            }
+            out.push(value.clone());
+        }
+        out
+    }
+}
+
+// ---------------------------------------------------------------- §5
+
+#[derive(Debug)]
+pub struct Pca {
+    pub groups: Vec<Vec<usize>>,
+    pub consts: Vec<(usize, i32)>,
+    pub segments: Vec<Segment>,
+}
+
+#[derive(Debug)]
+pub struct Segment {
+    pub start: u32,
+    pub end: u32,
+    pub groups: Vec<Group>,
+    /// `(frame relative to start, channel, value)`.
+    pub patches: Vec<(u32, usize, i32)>,
+}
+
+#[derive(Debug)]
+pub struct Group {
+    pub k: usize,
+    pub ms: u32,
+    /// Stored means (before `<< ms`).
+    pub mean: Vec<i32>,
+    /// `basis[c][j]`.
+    pub basis: Vec<Vec<i32>>,
+    /// Key times relative to the segment's start.
+    pub times: Vec<u32>,
+    /// `control[r][j]`: component `j`'s value at key `r`.
+    pub control: Vec<Vec<i32>>,
+}
+
+impl Pca {
+    /// §5.1–§5.3, §5.5.
+    pub fn parse(section: &[u8], channels: usize) -> Pca {
+        let mut r = Reader::new(section);
+        let w = r.u8();
+        assert!(w == 1 || w == 2);
+        let index = |r: &mut Reader<'_>| -> usize {
+            if w == 1 {
+                usize::from(r.u8())
+            } else {
+                usize::from(u16::from_le_bytes([r.u8(), r.u8()]))
+            }
+        };
+        let g = r.varint();
+        let groups: Vec<Vec<usize>> = (0..g)
+            .map(|_| {
+                let n = r.varint();
+                (0..n).map(|_| index(&mut r)).collect()
+            })
+            .collect();
+        let z = r.varint() as usize;
+        let idx: Vec<usize> = (0..z).map(|_| index(&mut r)).collect();
+        let consts: Vec<(usize, i32)> = idx.into_iter().map(|c| (c, r.zigzag())).collect();
+        let mut all: Vec<usize> = groups.iter().flatten().copied().collect();
+        all.extend(consts.iter().map(|&(c, _)| c));
+        all.sort_unstable();
+        assert_eq!(all, (0..channels).collect::<Vec<_>>(), "every channel once");
+        let s = r.varint();
+        let segments = (0..s)
+            .map(|_| {
+                let start = r.varint();
+                let end = r.varint();
+                let len = r.varint() as usize;
+                let mut body = Reader::new(r.take(len));
+                let gs = groups
+                    .iter()
+                    .map(|g| Group::parse(&mut body, g.len(), end - start))
+                    .collect();
+                assert!(body.done(), "group records fill the body");
+                let len = r.varint() as usize;
+                let mut p = Reader::new(r.take(len));
+                let mut patches = Vec::new();
+                let mut frame = 0;
+                while !p.done() {
+                    frame += p.varint();
+                    let c = index(&mut p);
+                    patches.push((frame, c, p.zigzag()));
+                }
+                Segment {
+                    start,
+                    end,
+                    groups: gs,
+                    patches,
+                }
+            })
+            .collect();
+        assert!(r.done(), "bytes after the last segment");
+        Pca {
+            groups,
+            consts,
+            segments,
+        }
+    }
+
+    /// §5.4: the pose at `pos` (frames, 16.16).
+    pub fn pose(&self, pos: u64, channels: usize) -> Vec<i32> {
+        let mut out = vec![0i32; channels];
+        let f = (pos >> 16) as u32;
+        let frac = (pos & 0xFFFF) as i64;
+        // 1. The primary segment, constants.
+        let p = self
+            .segments
+            .iter()
+            .rposition(|s| s.start <= f)
+            .expect("a primary segment");
+        for &(c, v) in &self.consts {
+            out[c] = v;
+        }
+        // 2. Blend with a neighbour, or evaluate the primary segment alone.
+        let blend_with = if p > 0 && pos < u64::from(self.segments[p - 1].end + 1) << 16 {
+            Some((p - 1, p))
+        } else if p + 1 < self.segments.len()
+            && pos > u64::from(self.segments[p + 1].start - 1) << 16
+        {
+            Some((p, p + 1))
+        } else {
+            None
+        };
+        match blend_with {
+            None => self.evaluate(&self.segments[p], pos, &mut out),
+            Some((a, b)) => {
+                // 4. Blend.
+                let mut va = out.clone();
+                let mut vb = out.clone();
+                self.evaluate(&self.segments[a], pos, &mut va);
+                self.evaluate(&self.segments[b], pos, &mut vb);
+                let s = i64::from(self.segments[b].start);
+                let e = i64::from(self.segments[a].end);
+                let w = ((pos as i64 - ((s - 1) << 16)) / (e - s + 2)).clamp(0, 65536);
+                for c in 0..channels {
+                    let d = i64::from(vb[c].wrapping_sub(va[c]));
+                    out[c] = va[c].wrapping_add(((d * w) >> 16) as i32);
+                }
+            }
+        }
+        // 5. Patches of f (weight 1 − frac) and f + 1 (weight frac).
+        let mut patch = |frame: u32, weight: i64| {
+            let Some(seg) = self.segments.iter().rfind(|s| s.start <= frame) else {
+                return;
+            };
+            for &(rel, c, v) in &seg.patches {
+                if seg.start + rel == frame {
+                    out[c] = out[c].wrapping_add(((i64::from(v) * weight) >> 16) as i32);
+                }
+            }
+        };
+        patch(f, 65536 - frac);
+        if frac > 0 {
+            patch(f + 1, frac);
+        }
+        out
+    }
+
+    /// §5.4 step 3.
+    fn evaluate(&self, seg: &Segment, pos: u64, out: &mut [i32]) {
+        let rel = (pos as i64 - (i64::from(seg.start) << 16))
+            .clamp(0, i64::from(seg.end - seg.start) << 16);
+        for (channels, g) in self.groups.iter().zip(&seg.groups) {
+            if g.k == 0 {
+                for (&c, &mean) in channels.iter().zip(&g.mean) {
+                    out[c] = mean.wrapping_shl(g.ms);
+                }
+                continue;
+            }
+            let a = catmull_rom(&g.times, &g.control, rel);
+            for (row, &c) in channels.iter().enumerate() {
+                let acc = g.basis[row]
+                    .iter()
+                    .zip(&a)
+                    .fold(64i32, |acc, (&b, &a)| acc.wrapping_add(b.wrapping_mul(a)));
+                out[c] = (g.mean[row] << g.ms).wrapping_add(acc >> 7);
+            }
+        }
+    }
+}
+
+/// §5.4's fixed-point non-uniform Catmull-Rom: the `k` coefficients at
+/// `rel` (16.16 frames from the segment's start).
+pub fn catmull_rom(times: &[u32], control: &[Vec<i32>], rel: i64) -> Vec<i32> {
+    let m = times.len();
+    let i = (0..=m - 2)
+        .rev()
+        .find(|&i| i64::from(times[i]) << 16 <= rel)
+        .unwrap_or(0);
+    let key = |q: isize| (q.clamp(0, m as isize - 1)) as usize;
+    let keys = [key(i as isize - 1), i, i + 1, key(i as isize + 2)];
+    let t = keys.map(|q| i64::from(times[q]));
+    let [ta, t0, t1, tb] = t;
+    let span = t1 - t0;
+    let u = (rel - (t0 << 16)) / span;
+    let u2 = (u * u) >> 16;
+    let u3 = (u2 * u) >> 16;
+    let h00 = 2 * u3 - 3 * u2 + 65536;
+    let h10 = u3 - 2 * u2 + u;
+    let h01 = 3 * u2 - 2 * u3;
+    let h11 = u3 - u2;
+    let ra = (span << 16) / (t1 - ta);
+    let rb = (span << 16) / (tb - t0);
+    let x = (h10 * ra) >> 16;
+    let y = (h11 * rb) >> 16;
+    let w = [-x, h00 - y, h01 + x, y];
+    assert_eq!(w.iter().sum::<i64>(), 65536, "weights sum to one");
+    (0..control[0].len())
+        .map(|j| {
+            let s: i64 = (0..4).map(|q| w[q] * i64::from(control[keys[q]][j])).sum();
+            ((s + 32768) >> 16) as i32
+        })
+        .collect()
+}
+
+impl Group {
+    /// §5.3, for a group of `n` channels in a segment of `last + 1` frames.
+    fn parse(r: &mut Reader<'_>, n: usize, last: u32) -> Group {
+        let k = usize::from(r.u8());
+        let ms = u32::from(r.u8());
+        assert!(k <= 16 && ms <= 16);
+        if k == 0 {
+            return Group {
+                k,
+                ms,
+                mean: (0..n).map(|_| r.zigzag()).collect(),
+                basis: Vec::new(),
+                times: Vec::new(),
+                control: Vec::new(),
+            };
+        }
+        let mean = (0..n)
+            .map(|_| i32::from(i16::from_le_bytes([r.u8(), r.u8()])))
+            .collect();
+        let basis = (0..n)
+            .map(|_| (0..k).map(|_| i32::from(r.u8() as i8)).collect())
+            .collect();
+        let m = r.varint() as usize;
+        let tb = u32::from(r.u8());
+        assert!((1..=15).contains(&tb) && last < 1 << tb);
+        let comps: Vec<(u32, u32, i32)> = (0..k)
+            .map(|_| (u32::from(r.u8()), u32::from(r.u8()), r.zigzag()))
+            .collect();
+        let rest = r.bytes.get(r.pos..).unwrap_or_default();
+        let mut bits = Bits {
+            bytes: rest,
+            bit: 0,
+        };
+        let times: Vec<u32> = (0..m).map(|_| bits.read(tb)).collect();
+        assert_eq!(times[0], 0);
+        assert_eq!(times[m - 1], last);
+        assert!(times.windows(2).all(|w| w[0] < w[1]));
+        let control = (0..m)
+            .map(|_| {
+                comps
+                    .iter()
+                    .map(|&(width, shift, offset)| {
+                        offset.wrapping_add((bits.read(width) as i32).wrapping_shl(shift))
+                    })
+                    .collect()
+            })
+            .collect();
+        r.take(bits.bit.div_ceil(8));
+        Group {
+            k,
+            ms,
+            mean,
+            basis,
+            times,
+            control,
+        }
+    }
+}
+
+// ---------------------------------------------------------------- §5b
+
+#[derive(Debug)]
+pub struct Predictive {
+    pub block_frames: u32,
+    /// Per channel: `Err(value)` constant, `Ok((weight quarters, step))`.
+    pub modes: Vec<Result<(i64, i64), i32>>,
+    pub blocks: Vec<Vec<u8>>,
+}
+
+impl Predictive {
+    /// §5b.1.
+    pub fn parse(section: &[u8], channels: usize, frames: u32) -> Predictive {
+        let mut r = Reader::new(section);
+        assert_eq!(r.varint() as usize, channels);
+        let block_frames = r.varint();
+        let unit = r.varint();
+        assert!(block_frames >= 1 && unit >= 1);
+        let modes = (0..channels)
+            .map(|_| {
+                let mode = r.varint();
+                if mode & 4 != 0 {
+                    assert_eq!(mode, 4, "a constant channel's mode is exactly 4");
+                    Err(r.zigzag())
+                } else {
+                    let a = [0, 2, 3, 4][(mode & 3) as usize];
+                    let s = i64::from(unit) * i64::from(mode >> 3);
+                    assert!((1..=1 << 30).contains(&s));
+                    Ok((a, s))
+                }
+            })
+            .collect();
+        let k = r.varint();
+        assert_eq!(k, frames.div_ceil(block_frames));
+        let lengths: Vec<usize> = (0..k).map(|_| r.varint() as usize).collect();
+        let blocks = lengths.iter().map(|&n| r.take(n).to_vec()).collect();
+        assert!(r.done(), "block lengths add up to the rest");
+        Predictive {
+            block_frames,
+            modes,
+            blocks,
+        }
+    }
+
+    /// §5b.2: every frame, in order.
+    pub fn decode(&self, channels: usize, frames: u32) -> Vec<Vec<i32>> {
+        self.decode_traced(channels, frames).0
+    }
+
+    /// [`Self::decode`], and the residuals `[frame][channel]` (0 for a
+    /// constant channel) and each block's [`RangeDecoder::trace`].
+    pub fn decode_traced(&self, channels: usize, frames: u32) -> (Vec<Vec<i32>>, Residuals) {
+        let mut out: Vec<Vec<i32>> = Vec::new();
+        let mut residuals = Residuals::default();
+        let mut rc = RangeDecoder::new(&[]);
+        let mut probs = [1024u32; 30];
+        let mut ctx = vec![0usize; channels];
+        for f in 0..frames {
+            let j = f % self.block_frames;
+            if j == 0 {
+                let next = RangeDecoder::new(&self.blocks[(f / self.block_frames) as usize]);
+                let done = std::mem::replace(&mut rc, next);
+                if f > 0 {
+                    residuals.traces.push(done.trace);
+                }
+                probs = [1024; 30];
+                ctx.fill(0);
+            }
+            let mut frame = Vec::with_capacity(channels);
+            let mut qs = vec![0i64; channels];
+            for (c, mode) in self.modes.iter().enumerate() {
+                let (a, s) = match *mode {
+                    Err(v) => {
+                        frame.push(v);
+                        continue;
+                    }
+                    Ok(m) => m,
+                };
+                let v1 = |back: usize| i64::from(out[out.len() - back][c]);
+                let pred = match j {
+                    0 => 0,
+                    1 => v1(1),
+                    _ => v1(1) + ((a * (v1(1) - v1(2))) >> 2),
+                };
+                let q = rc.residual(&mut probs, ctx[c]);
+                frame.push((pred + q * s) as i32);
+                ctx[c] = q.unsigned_abs().min(2) as usize;
+                qs[c] = q;
+            }
+            out.push(frame);
+            residuals.q.push(qs);
+        }
+        residuals.traces.push(rc.trace);
+        (out, residuals)
+    }
+}
+
+/// What [`Predictive::decode_traced`] saw.
+#[derive(Debug, Default)]
+pub struct Residuals {
+    /// `q[frame][channel]`.
+    pub q: Vec<Vec<i64>>,
+    /// Per block, every bit read (see [`RangeDecoder::trace`]).
+    pub traces: Vec<Vec<TracedBit>>,
+}
+
+/// One bit read: `(p before, or None for a direct bit; range and code
+/// before; the bit)`.
+pub type TracedBit = (Option<u32>, u32, u32, u32);
+
+/// LZMA's range decoder as §5b.2 gives it.
+pub struct RangeDecoder<'a> {
+    block: &'a [u8],
+    next: usize,
+    range: u32,
+    code: u32,
+    /// Every bit read, for SPEC.md's worked example.
+    pub trace: Vec<TracedBit>,
+}
+
+impl<'a> RangeDecoder<'a> {
+    pub fn new(block: &'a [u8]) -> Self {
+        let mut d = RangeDecoder {
+            block,
+            next: 0,
+            range: u32::MAX,
+            code: 0,
+            trace: Vec::new(),
+        };
+        for _ in 0..4 {
+            d.code = (d.code << 8) | d.byte();
+        }
+        d
+    }
+
+    fn byte(&mut self) -> u32 {
+        let b = self.block.get(self.next).copied().unwrap_or(0);
+        self.next += 1;
+        u32::from(b)
+    }
+
+    fn normalise(&mut self) {
+        while self.range < 1 << 24 {
+            self.range <<= 8;
+            self.code = (self.code << 8) | self.byte();
+        }
+    }
+
+    pub fn bit(&mut self, p: &mut u32) -> u32 {
+        let before = (Some(*p), self.range, self.code);
+        let bound = (self.range >> 11) * *p;
+        let bit = if self.code < bound {
+            self.range = bound;
+            *p += (2048 - *p) >> 5;
+            0
+        } else {
+            self.code -= bound;
+            self.range -= bound;
+            *p -= *p >> 5;
+            1
+        };
+        self.trace.push((before.0, before.1, before.2, bit));
+        self.normalise();
+        bit
+    }
+
+    pub fn direct(&mut self) -> u32 {
+        let before = (None, self.range, self.code);
+        self.range >>= 1;
+        let bit = if self.code >= self.range {
+            self.code -= self.range;
+            1
+        } else {
+            0
+        };
+        self.trace.push((before.0, before.1, before.2, bit));
+        self.normalise();
+        bit
+    }
+
+    /// A residual in context `x`, probabilities `P[x·10 … x·10 + 9]`.
+    pub fn residual(&mut self, probs: &mut [u32; 30], x: usize) -> i64 {
+        let p = &mut probs[x * 10..x * 10 + 10];
+        if self.bit(&mut p[0]) == 0 {
+            return 0;
+        }
+        let negative = self.bit(&mut p[1]) == 1;
+        let mut a: i64 = 1;
+        while a <= 8 && self.bit(&mut p[1 + a as usize]) == 1 {
+            a += 1;
+        }
+        if a == 9 {
+            let mut n = 0;
+            while n < 30 && self.direct() == 1 {
+                n += 1;
+            }
+            let mut r: i64 = 0;
+            for _ in 0..n {
+                r = (r << 1) | i64::from(self.direct());
+            }
+            a = 9 + (1 << n) - 1 + r;
+        }
+        if negative {
+            -a
+        } else {
+            a
+        }
+    }
+}
