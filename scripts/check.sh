@@ -2,6 +2,7 @@
 # The static checks that CI runs before the tests (scripts/test.sh runs this first):
 #   fmt           cargo fmt --check: the workspace, firmware-example/, decoder-nostd/fuzz/
 #   clippy        cargo clippy --workspace --all-targets -- -D warnings
+#   fuzz-clippy   the same for decoder-nostd/fuzz (its own workspace)
 #   boards        the board table (scripts/boards.sh) names the memory maps build.rs uses
 #   fw-clippy-B   cargo clippy -- -D warnings of the firmware for board B, in each build mode
 #                 (frames, sample, servo, stream), through scripts/toolchain.sh's route
@@ -195,6 +196,7 @@ panic_free() {
 # ---- the steps
 step fmt fmt_all
 step clippy cargo clippy --workspace --all-targets -- -D warnings
+step fuzz-clippy cargo clippy --manifest-path decoder-nostd/fuzz/Cargo.toml --all-targets -- -D warnings
 step boards boards_agree
 for b in $(mocap_boards); do
     step "fw-clippy-$b" fw_clippy "$b"
