@@ -8,7 +8,7 @@
 #                 (frames, sample, servo, stream), through scripts/toolchain.sh's route
 #   nostd-...     mocap-decoder on thumbv6m-none-eabi with no default features, then each codec
 #                 feature alone, and defmt; mocap-servo with no default features and pca9685
-#   panic-B       the firmware ELF of board B (scripts/firmware.sh build) has no panic machinery
+#   panic-B       the firmware ELFs of board B (scripts/firmware.sh build, every mode) have no panic machinery
 #                 (core::panicking::*, panic_fmt, panic_bounds_check, *_fail) except the call
 #                 sites listed, each with why it cannot fire, in scripts/panic-allowlist.txt
 #
@@ -164,12 +164,28 @@ panic_call_sites() {
     rm -f "$dis"
 }
 
+# The firmware's build modes the panic check covers: each selects other code (build.rs consts).
+PANIC_MODES=("" "--sample-us 20000" "--servo maestro" "--servo ssc32" "--servo pwm" "--servo pca9685" "--stream")
+
+# panic_free BOARD: every mode's ELF of BOARD against the allowlist.
 panic_free() {
-    local board="$1" elf sites allowed unexpected syms
+    local board="$1" mode rc=0
     command -v llvm-objdump >/dev/null && command -v llvm-symbolizer >/dev/null && command -v llvm-nm >/dev/null \
         || mocap_ensure_packages llvm || return 1
     : >"$LOG_DIR/panic-sites-$board.txt"
-    elf="$(bash scripts/firmware.sh build --board "$board" | tail -n1)" || return 1
+    for mode in "${PANIC_MODES[@]}"; do
+        # shellcheck disable=SC2086 # a mode is several words
+        panic_free_elf "$board" $mode || rc=1
+    done
+    return "$rc"
+}
+
+# panic_free_elf BOARD [FIRMWARE-ARGS...]: one ELF (scripts/firmware.sh build --board BOARD ARGS).
+panic_free_elf() {
+    local board="$1" elf sites allowed unexpected syms
+    shift
+    echo "== board $board, mode: ${*:-frames}"
+    elf="$(bash scripts/firmware.sh build --board "$board" "$@" | tail -n1)" || return 1
     echo "ELF: $elf"
     syms="$(llvm-nm -C --defined-only "$elf" | cut -d' ' -f3- | grep -E "$PANIC_RE" || true)"
     if [ -z "$syms" ]; then
@@ -181,9 +197,9 @@ panic_free() {
     printf 'call sites (symbol <- origin, address, source):\n%s\n' "$(sed 's/^/  /' <<<"$sites")"
     allowed="$(sed -e 's/[[:space:]]*#.*$//' -e '/^[[:space:]]*$/d' "$ALLOWLIST" | sort -u)"
     unexpected="$(cut -f1 <<<"$sites" | sort -u | comm -23 - <(printf '%s\n' "$allowed") || true)"
-    printf '%s\n' "$sites" | cut -f1 | sort -u >"$LOG_DIR/panic-sites-$board.txt"
+    printf '%s\n' "$sites" | cut -f1 | sort -u >>"$LOG_DIR/panic-sites-$board.txt"
     if [ -n "$unexpected" ]; then
-        echo "call sites into panic machinery that scripts/panic-allowlist.txt does not allow:"
+        echo "board $board, mode ${*:-frames}: call sites into panic machinery that scripts/panic-allowlist.txt does not allow:"
         grep -F -f <(printf '%s\n' "$unexpected") <<<"$sites" | sed 's/^/  /'
         echo "remove them (get()/slice patterns/iterators instead of indexing, checked_* instead of / and %),"
         echo "or add the exact 'symbol <- origin' line with why it cannot fire to scripts/panic-allowlist.txt"
