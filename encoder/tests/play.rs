@@ -8,7 +8,9 @@ use std::path::Path;
 
 use mocap_decoder::Clip;
 use mocap_encoder::encode::{Bound, CodecChoice};
-use mocap_encoder::play::{clip_frames, servo_clip_stream, servo_stream, Protocol, ServoStream};
+use mocap_encoder::play::{
+    clip_frames, servo_clip_stream, servo_stream, PlayError, Protocol, ServoStream,
+};
 use mocap_encoder::rig::Rig;
 use mocap_encoder::servo_clip::{ServoEncodeOptions, ServoNames, ServoRate};
 use mocap_encoder::{bvh, servo_clip};
@@ -250,7 +252,7 @@ fn rig_like(s: &ServoStream) -> Rig {
 fn mutate_and_play(
     bytes: &[u8],
     mut seed: u64,
-    play: impl Fn(&Clip<'_>) -> Result<(), String>,
+    play: impl Fn(&Clip<'_>) -> Result<(), PlayError>,
 ) -> (usize, usize) {
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
     let mut next = |n: usize| {
@@ -497,7 +499,7 @@ fn send_poses_sends_every_tick_of_the_servo_clip_then_stop() {
 #[test]
 fn error_messages_name_what_is_wrong() {
     use mocap_encoder::play::{pose_frames, servo_clip_targets};
-    fn message(e: &impl std::fmt::Display) -> String {
+    fn message(e: &impl std::error::Error) -> String {
         e.to_string()
     }
     let (motion, rig) = demo();
