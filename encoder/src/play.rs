@@ -7,9 +7,9 @@
 use mocap_decoder::{tick_count, tick_us, Clip, RigServo};
 use mocap_servo::output::{MaestroOutput, ServoOutput, Ssc32Output};
 use mocap_servo::record::{RecordError, SerialRecorder};
-use mocap_servo::{ssc32, stream, Message, OutputError, Playback, ServoLimits};
+use mocap_servo::{ssc32, stream, Message, OutputError, Playback, PlaybackError, ServoLimits};
 
-use crate::rig::{Rig, Servo, ServoTracks};
+use crate::rig::{Rig, RigError, Servo, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
 
 /// Serial servo-controller protocol.
@@ -20,6 +20,69 @@ pub enum Protocol {
     Maestro,
     /// Lynxmotion SSC-32 group move: `#<ch>P<µs>…T<ms>\r`.
     Ssc32,
+}
+
+/// Why a clip could not be played or framed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlayError {
+    /// `--rate` is zero, negative or not a number.
+    #[error("servo rate {rate_hz} Hz must be positive")]
+    BadRate {
+        /// The rate given, Hz.
+        rate_hz: f64,
+    },
+    /// A clip without a rig table played without a rig.
+    #[error("not a servo clip: give --rig")]
+    NotAServoClip,
+    /// `--poses` of a clip whose servo targets cannot be taken.
+    #[error("--poses needs a servo clip (mocap encode --rig)")]
+    PosesNeedServoClip(#[source] Box<PlayError>),
+    /// The clip's length does not fit the stream's 32-bit `total`.
+    #[error("clip larger than 4 GB")]
+    ClipTooLarge {
+        /// The clip's length, bytes.
+        len: usize,
+    },
+    /// `--passes 0`.
+    #[error("--passes must be at least 1")]
+    NoPasses,
+    /// The clip does not parse, decode or sample.
+    #[error(transparent)]
+    Clip(#[from] mocap_decoder::Error),
+    /// The rig does not fit the clip's skeleton.
+    #[error(transparent)]
+    Rig(#[from] RigError),
+    /// The rig's servos cannot be played (count, limits).
+    #[error(transparent)]
+    Playback(#[from] PlaybackError),
+    /// The servo controller's output refuses the rig's channels.
+    #[error("{}: {source}", protocol.name())]
+    Output {
+        /// The controller's protocol.
+        protocol: Protocol,
+        /// Why.
+        source: mocap_servo::Error,
+    },
+    /// A tick could not be written.
+    #[error(transparent)]
+    Tick(#[from] OutputError<RecordError>),
+    /// A tick's pulses do not make a `Pose` message.
+    #[error(transparent)]
+    Pose(mocap_servo::Error),
+    /// A message does not fit a stream frame.
+    #[error(transparent)]
+    Frame(mocap_servo::Error),
+}
+
+impl Protocol {
+    /// The protocol's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Protocol::Maestro => "maestro",
+            Protocol::Ssc32 => "ssc32",
+        }
+    }
 }
 
 /// Most servos a rig may drive here.
@@ -53,22 +116,21 @@ impl ServoStream {
 }
 
 /// Servo rate in millihertz from an optional `--rate` (Hz).
-fn rate_mhz(rate_hz: Option<f64>, default_mhz: u32) -> Result<u32, String> {
+fn rate_mhz(rate_hz: Option<f64>, default_mhz: u32) -> Result<u32, PlayError> {
     match rate_hz {
         Some(r) if r.is_finite() && r > 0.0 => {
             Ok((r * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32)
         }
-        Some(r) => Err(format!("servo rate {r} Hz must be positive")),
+        Some(rate_hz) => Err(PlayError::BadRate { rate_hz }),
         None => Ok(default_mhz),
     }
 }
 
 /// The clip sampled with `sample_at` at every servo tick (the integer
 /// timing the firmware uses: `tick_count`, `tick_us`), `ticks × channels`.
-fn sample_ticks(clip: &Clip<'_>, rate_mhz: u32) -> Result<(usize, Vec<i32>), String> {
+fn sample_ticks(clip: &Clip<'_>, rate_mhz: u32) -> Result<(usize, Vec<i32>), PlayError> {
     let count = tick_count(clip.header().duration_us(), rate_mhz);
-    let samples = clipfile::sample_all(clip, (0..count).map(|i| tick_us(i, rate_mhz)))
-        .map_err(|e| e.to_string())?;
+    let samples = clipfile::sample_all(clip, (0..count).map(|i| tick_us(i, rate_mhz)))?;
     Ok((count as usize, samples))
 }
 
@@ -87,8 +149,8 @@ pub struct ClipTargets {
 
 /// The targets of a servo clip (one with a rig table, SPEC.md §3.5) at its
 /// rig's rate or `rate_hz`.
-pub fn servo_clip_targets(clip: &Clip<'_>, rate_hz: Option<f64>) -> Result<ClipTargets, String> {
-    let rig = clip.rig().ok_or("not a servo clip: give --rig")?;
+pub fn servo_clip_targets(clip: &Clip<'_>, rate_hz: Option<f64>) -> Result<ClipTargets, PlayError> {
+    let rig = clip.rig().ok_or(PlayError::NotAServoClip)?;
     let servos: Vec<RigServo> = rig.servos().collect();
     let rate_mhz = rate_mhz(rate_hz, rig.rate_mhz())?;
     let (count, samples) = sample_ticks(clip, rate_mhz)?;
@@ -110,29 +172,31 @@ pub fn servo_clip_targets(clip: &Clip<'_>, rate_hz: Option<f64>) -> Result<ClipT
     })
 }
 
-/// Plays a servo clip at its rig's rate or `rate_hz`: [`servo_clip_targets`],
-/// then [`drive`].
+/// Plays a servo clip at its rig's rate or `rate_hz`: [`servo_clip_targets`]
+/// played on [`Playback`], the firmware's own loop — every pulse held to its
+/// servo's range and speed, from neutral and back to it.
 pub fn servo_clip_stream(
     clip: &Clip<'_>,
     protocol: Protocol,
     rate_hz: Option<f64>,
-) -> Result<ServoStream, String> {
+) -> Result<ServoStream, PlayError> {
     let t = servo_clip_targets(clip, rate_hz)?;
     drive(t.targets, &t.servos, t.rate_mhz, protocol, None)
 }
 
 /// Samples a motion clip at the rig's rate (or `rate_hz`), maps it through
 /// `rig` (expression, angle range, speed and acceleration limits, with the
-/// clamp report), then [`drive`].
+/// clamp report), then plays the targets on [`Playback`] as
+/// [`servo_clip_stream`] does.
 pub fn servo_stream(
     clip: &Clip<'_>,
     rig: &Rig,
     protocol: Protocol,
     rate_hz: Option<f64>,
-) -> Result<ServoStream, String> {
+) -> Result<ServoStream, PlayError> {
     let rate_mhz = rate_mhz(rate_hz, servo_clip::rate_mhz(rig))?;
     let skeleton = clipfile::skeleton(clip);
-    let channels = rig.resolve(&skeleton).map_err(|e| e.to_string())?;
+    let channels = rig.resolve(&skeleton)?;
     let (count, samples) = sample_ticks(clip, rate_mhz)?;
     let metres_per_unit = f64::from(clip.header().source_unit_nm()) * 1e-9;
     let frame_time = 1000.0 / f64::from(rate_mhz);
@@ -158,27 +222,24 @@ fn drive(
     rate_mhz: u32,
     protocol: Protocol,
     tracks: Option<ServoTracks>,
-) -> Result<ServoStream, String> {
-    let mut playback =
-        Playback::<MAX_SERVOS>::new(servos.iter().copied(), rate_mhz).map_err(|e| e.to_string())?;
+) -> Result<ServoStream, PlayError> {
+    let mut playback = Playback::<MAX_SERVOS>::new(servos.iter().copied(), rate_mhz)?;
     let limits = playback.limits().to_vec();
     let rate_hz = f64::from(rate_mhz) / 1000.0;
     let time_ms = (1000.0 / rate_hz).round().clamp(1.0, f64::from(u16::MAX)) as u16;
     let outputs: Vec<u16> = servos.iter().map(|s| s.output).collect();
     let port = SerialRecorder::<TICK_BYTES>::new();
-    let played = match protocol {
+    let refused = |source| PlayError::Output { protocol, source };
+    let (ticks, pulses, clip_ticks) = match protocol {
         Protocol::Maestro => {
-            let output =
-                MaestroOutput::new(&port, &outputs).map_err(|e| format!("maestro: {e}"))?;
-            play(&mut playback, output, &port, targets)
+            let output = MaestroOutput::new(&port, &outputs).map_err(refused)?;
+            play(&mut playback, output, &port, targets)?
         }
         Protocol::Ssc32 => {
-            let output =
-                Ssc32Output::new(&port, &outputs, time_ms).map_err(|e| format!("ssc32: {e}"))?;
-            play(&mut playback, output, &port, targets)
+            let output = Ssc32Output::new(&port, &outputs, time_ms).map_err(refused)?;
+            play(&mut playback, output, &port, targets)?
         }
     };
-    let (ticks, pulses, clip_ticks) = played.map_err(|e| e.to_string())?;
     Ok(ServoStream {
         rate_hz,
         ticks,
@@ -224,15 +285,15 @@ fn play<O: ServoOutput<Error = RecordError>>(
 }
 
 /// One frame (delimiter included) of `message`.
-fn frame(message: &Message<'_>) -> Result<Vec<u8>, String> {
+fn frame(message: &Message<'_>) -> Result<Vec<u8>, PlayError> {
     let mut buf = [0u8; stream::MAX_FRAME_LEN];
-    let len = stream::encode_frame(message, &mut buf).map_err(|e| e.to_string())?;
+    let len = stream::encode_frame(message, &mut buf).map_err(PlayError::Frame)?;
     Ok(buf[..len].to_vec())
 }
 
 /// The first frame of a session: a lone `00`, which ends whatever the
 /// receiver holds (line noise, a frame cut short), then `Hello`.
-fn hello() -> Result<Vec<u8>, String> {
+fn hello() -> Result<Vec<u8>, PlayError> {
     let mut bytes = vec![stream::DELIMITER];
     bytes.extend(frame(&Message::Hello {
         version: stream::PROTOCOL_VERSION,
@@ -249,10 +310,11 @@ fn hello() -> Result<Vec<u8>, String> {
 /// `Play` before the last missing chunk is remembered), so a `Play` after
 /// every pass both starts the clip as early as possible and survives the
 /// loss of most `Play`s.
-pub fn clip_frames(clip: &[u8], looped: bool, passes: u32) -> Result<Vec<Vec<u8>>, String> {
-    let total = u32::try_from(clip.len()).map_err(|_| "clip larger than 4 GB".to_string())?;
+pub fn clip_frames(clip: &[u8], looped: bool, passes: u32) -> Result<Vec<Vec<u8>>, PlayError> {
+    let total =
+        u32::try_from(clip.len()).map_err(|_| PlayError::ClipTooLarge { len: clip.len() })?;
     if passes == 0 {
-        return Err("--passes must be at least 1".into());
+        return Err(PlayError::NoPasses);
     }
     let mut pass = Vec::new();
     for (i, chunk) in clip.chunks(stream::MAX_CHUNK_LEN).enumerate() {
@@ -292,12 +354,12 @@ impl PoseStream {
 }
 
 /// The frames of `mocap send --poses` for a servo clip.
-pub fn pose_frames(clip: &Clip<'_>) -> Result<PoseStream, String> {
-    let t = servo_clip_targets(clip, None)
-        .map_err(|_| "--poses needs a servo clip (mocap encode --rig)".to_string())?;
+pub fn pose_frames(clip: &Clip<'_>) -> Result<PoseStream, PlayError> {
+    let t =
+        servo_clip_targets(clip, None).map_err(|e| PlayError::PosesNeedServoClip(Box::new(e)))?;
     let mut frames = vec![hello()?];
     for (i, pulses) in t.targets.iter().enumerate() {
-        let pose = Message::pose(i as u16, pulses).map_err(|e| e.to_string())?;
+        let pose = Message::pose(i as u16, pulses).map_err(PlayError::Pose)?;
         frames.push(frame(&pose)?);
     }
     frames.push(frame(&Message::Stop)?);

@@ -10,9 +10,57 @@ use mocap_decoder::{consts, tick_count, tick_us, Clip, RigServo};
 
 use crate::clipfile;
 use crate::container::{assemble, frame_time_ns, varint, zigzag};
-use crate::encode::{self, Bound, CodecChoice, EncodeOptions};
+use crate::encode::{self, Bound, CodecChoice, EncodeError, EncodeOptions};
 use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
 use crate::rig::{Rig, Servo, ServoTracks};
+
+/// Why a servo clip could not be made or measured.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ServoClipError {
+    /// A servo's angle range is empty or reversed.
+    #[error("servo {servo}: angle range must be increasing")]
+    AngleRangeNotIncreasing {
+        /// The servo's name.
+        servo: String,
+    },
+    /// More servos than the header's 32-bit count.
+    #[error("too many servos")]
+    TooManyServos(usize),
+    /// The clip has no rig table.
+    #[error("not a servo clip (no rig table)")]
+    NotAServoClip,
+    /// The clip and the reference ticks have different servo counts.
+    #[error("servo count differs from the reference")]
+    ServoCountDiffers {
+        /// Servos in the clip.
+        clip: usize,
+        /// Servos in the reference.
+        reference: usize,
+    },
+    /// The bound has no angle part.
+    #[error("a servo clip needs a bound in degrees of servo travel (e.g. 0.5deg)")]
+    NoAngleBound,
+    /// A rig-rate clip misses the bound at the ticks after every tightening
+    /// round.
+    #[error("could not meet {bound_deg}° at the rig's ticks after tightening")]
+    BoundNotMetAtTicks {
+        /// The bound, degrees of servo travel.
+        bound_deg: f64,
+    },
+    /// The servo motion could not be encoded.
+    #[error(transparent)]
+    Encode(#[from] EncodeError),
+    /// The coded servo motion does not parse (a bug).
+    #[error("internal error: {0}")]
+    CodedClipRejected(#[source] mocap_decoder::Error),
+    /// The clip with the rig table does not parse (a bug).
+    #[error("internal error: servo clip rejected: {0}")]
+    ServoClipRejected(#[source] mocap_decoder::Error),
+    /// The clip does not parse, decode or sample.
+    #[error(transparent)]
+    Clip(#[from] mocap_decoder::Error),
+}
 
 /// The servo signals as a motion: servo `i` is root joint `i` with one
 /// `Zrotation` channel, in degrees of servo travel, at the capture's rate.
@@ -67,7 +115,7 @@ pub fn rate_mhz(rig: &Rig) -> u32 {
 
 /// The rig section in its compact form (SPEC.md §3.5.1): a leading `0`,
 /// then each servo as flags and only what differs from the previous one.
-pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, String> {
+pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, ServoClipError> {
     let mut out = vec![0];
     varint(&mut out, rate_mhz(rig));
     varint(&mut out, rig.servos.len() as u32);
@@ -96,7 +144,9 @@ pub fn rig_section(rig: &Rig) -> Result<Vec<u8>, String> {
             let span = u32::try_from(i64::from(s.angle_hi_mdeg) - i64::from(s.angle_lo_mdeg))
                 .ok()
                 .filter(|&v| v > 0)
-                .ok_or_else(|| format!("servo {}: angle range must be increasing", servo.name))?;
+                .ok_or_else(|| ServoClipError::AngleRangeNotIncreasing {
+                    servo: servo.name.clone(),
+                })?;
             if s.angle_lo_mdeg % 1000 == 0 && span % 1000 == 0 {
                 flags |= flag::ANGLE_DEG;
                 zigzag(&mut out, s.angle_lo_mdeg / 1000);
@@ -153,14 +203,15 @@ pub fn servo_header_section(frame_time_ns: u32, frame_count: u32, servos: u32) -
 /// `clip` (a coded servo motion) as a servo clip: the rig section added
 /// after the header, and with `names` [`ServoNames::Strip`] the header
 /// replaced by its servo form.
-pub fn attach_rig(clip: &[u8], rig: &Rig, names: ServoNames) -> Result<Vec<u8>, String> {
-    let parsed = Clip::parse(clip).map_err(|e| format!("internal error: {e}"))?;
+pub fn attach_rig(clip: &[u8], rig: &Rig, names: ServoNames) -> Result<Vec<u8>, ServoClipError> {
+    let parsed = Clip::parse(clip).map_err(ServoClipError::CodedClipRejected)?;
     let h = parsed.header();
     let mut sections: Vec<(u8, Vec<u8>)> = Vec::new();
     for s in parsed.sections() {
         if s.id == consts::SECTION_HEADER || s.id == consts::SECTION_HEADER_COMPACT {
             if names == ServoNames::Strip {
-                let servos = u32::try_from(h.channel_count()).map_err(|_| "too many servos")?;
+                let servos = u32::try_from(h.channel_count())
+                    .map_err(|_| ServoClipError::TooManyServos(h.channel_count()))?;
                 sections.push((
                     consts::SECTION_HEADER_COMPACT,
                     servo_header_section(h.frame_time_ns(), h.frame_count(), servos),
@@ -174,15 +225,15 @@ pub fn attach_rig(clip: &[u8], rig: &Rig, names: ServoNames) -> Result<Vec<u8>, 
         }
     }
     let bytes = assemble(&sections);
-    Clip::parse(&bytes).map_err(|e| format!("internal error: servo clip rejected: {e}"))?;
+    Clip::parse(&bytes).map_err(ServoClipError::ServoClipRejected)?;
     Ok(bytes)
 }
 
 /// Pulses (¼ µs) a servo clip decodes to, `[servo][frame]`, through the
 /// decoder's own mapping (`RigServo::pulse_qus`).
-pub fn decoded_pulses(clip: &Clip<'_>) -> Result<Vec<Vec<u16>>, String> {
-    let rig = clip.rig().ok_or("not a servo clip (no rig table)")?;
-    let frames = clipfile::decode_all(clip).map_err(|e| e.to_string())?;
+pub fn decoded_pulses(clip: &Clip<'_>) -> Result<Vec<Vec<u16>>, ServoClipError> {
+    let rig = clip.rig().ok_or(ServoClipError::NotAServoClip)?;
+    let frames = clipfile::decode_all(clip)?;
     let n = clip.header().channel_count().max(1);
     Ok(rig
         .servos()
@@ -282,15 +333,17 @@ pub struct TickError {
 
 /// Samples `clip` at every tick of `ticks` and measures it (see
 /// [`TickError`]).
-pub fn tick_error(clip: &Clip<'_>, ticks: &TickTracks) -> Result<TickError, String> {
-    let table = clip.rig().ok_or("not a servo clip (no rig table)")?;
+pub fn tick_error(clip: &Clip<'_>, ticks: &TickTracks) -> Result<TickError, ServoClipError> {
+    let table = clip.rig().ok_or(ServoClipError::NotAServoClip)?;
     let servos: Vec<RigServo> = table.servos().collect();
     let n = clip.header().channel_count();
     if n != ticks.angles.len() {
-        return Err("servo count differs from the reference".into());
+        return Err(ServoClipError::ServoCountDiffers {
+            clip: n,
+            reference: ticks.angles.len(),
+        });
     }
-    let samples =
-        clipfile::sample_all(clip, ticks.times_us.iter().copied()).map_err(|e| e.to_string())?;
+    let samples = clipfile::sample_all(clip, ticks.times_us.iter().copied())?;
     let mut e = TickError {
         ticks: ticks.ticks(),
         ..TickError::default()
@@ -375,11 +428,8 @@ pub fn encode_servo_clip(
     rig: &Rig,
     tracks: &ServoTracks,
     opts: &ServoEncodeOptions,
-) -> Result<ServoClip, String> {
-    let bound_deg = opts
-        .bound
-        .angle_deg
-        .ok_or("a servo clip needs a bound in degrees of servo travel (e.g. 0.5deg)")?;
+) -> Result<ServoClip, ServoClipError> {
+    let bound_deg = opts.bound.angle_deg.ok_or(ServoClipError::NoAngleBound)?;
     let ticks = tick_tracks(rig, tracks);
     let motion = match opts.rate {
         ServoRate::Rig => tick_motion(rig, &ticks),
@@ -401,10 +451,9 @@ pub fn encode_servo_clip(
                 metres_per_unit: 1e-3,
                 key_interval: opts.key_interval,
             },
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         let bytes = attach_rig(&enc.bytes, rig, opts.names)?;
-        let clip = Clip::parse(&bytes).map_err(|e| e.to_string())?;
+        let clip = Clip::parse(&bytes)?;
         let tick = tick_error(&clip, &ticks)?;
         if opts.rate == ServoRate::Rig && tick.max_deg > bound_deg {
             bound.angle_deg = Some(bound.angle_deg.unwrap_or(bound_deg) * 0.9);
@@ -439,9 +488,7 @@ pub fn encode_servo_clip(
             sections,
         });
     }
-    Err(format!(
-        "could not meet {bound_deg}° at the rig's ticks after tightening"
-    ))
+    Err(ServoClipError::BoundNotMetAtTicks { bound_deg })
 }
 
 /// The summary `mocap encode --rig` prints. "Raw" is 16-bit frames (one

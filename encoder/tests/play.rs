@@ -8,7 +8,9 @@ use std::path::Path;
 
 use mocap_decoder::Clip;
 use mocap_encoder::encode::{Bound, CodecChoice};
-use mocap_encoder::play::{clip_frames, servo_clip_stream, servo_stream, Protocol, ServoStream};
+use mocap_encoder::play::{
+    clip_frames, servo_clip_stream, servo_stream, PlayError, Protocol, ServoStream,
+};
 use mocap_encoder::rig::Rig;
 use mocap_encoder::servo_clip::{ServoEncodeOptions, ServoNames, ServoRate};
 use mocap_encoder::{bvh, servo_clip};
@@ -250,7 +252,7 @@ fn rig_like(s: &ServoStream) -> Rig {
 fn mutate_and_play(
     bytes: &[u8],
     mut seed: u64,
-    play: impl Fn(&Clip<'_>) -> Result<(), String>,
+    play: impl Fn(&Clip<'_>) -> Result<(), PlayError>,
 ) -> (usize, usize) {
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
     let mut next = |n: usize| {
@@ -490,4 +492,75 @@ fn send_poses_sends_every_tick_of_the_servo_clip_then_stop() {
     // A motion clip has no rig table to take pulses from.
     let (motion, _) = demo();
     assert!(pose_frames(&Clip::parse(&motion).unwrap()).is_err());
+}
+
+/// The messages `mocap play`, `mocap send` and `mocap encode --rig` print
+/// for these errors (the CLI prints the library's error as it is).
+#[test]
+fn error_messages_name_what_is_wrong() {
+    use mocap_encoder::play::{pose_frames, servo_clip_targets};
+    fn message(e: &impl std::error::Error) -> String {
+        e.to_string()
+    }
+    let (motion, rig) = demo();
+    let motion = Clip::parse(&motion).unwrap();
+    assert_eq!(
+        message(&clip_frames(b"clip", false, 0).unwrap_err()),
+        "--passes must be at least 1"
+    );
+    assert_eq!(
+        message(&pose_frames(&motion).unwrap_err()),
+        "--poses needs a servo clip (mocap encode --rig)"
+    );
+    assert_eq!(
+        message(&servo_clip_stream(&motion, Protocol::Maestro, None).unwrap_err()),
+        "not a servo clip: give --rig"
+    );
+    let (bytes, _, _) = servo_clip_bytes(CodecChoice::Index, 1.0);
+    let servo = Clip::parse(&bytes).unwrap();
+    for rate in [0.0, -2.5, f64::NAN] {
+        assert_eq!(
+            message(&servo_clip_targets(&servo, Some(rate)).unwrap_err()),
+            format!("servo rate {rate} Hz must be positive")
+        );
+        assert_eq!(
+            message(&servo_stream(&motion, &rig, Protocol::Ssc32, Some(rate)).unwrap_err()),
+            format!("servo rate {rate} Hz must be positive")
+        );
+    }
+    for e in [
+        servo_clip::decoded_pulses(&motion).unwrap_err(),
+        servo_clip::tick_error(&motion, &servo_clip::tick_tracks(&rig, &demo_tracks().1))
+            .unwrap_err(),
+    ] {
+        assert_eq!(message(&e), "not a servo clip (no rig table)");
+    }
+    let (rig, tracks) = demo_tracks();
+    let mut ticks = servo_clip::tick_tracks(&rig, &tracks);
+    ticks.angles.pop();
+    assert_eq!(
+        message(&servo_clip::tick_error(&servo, &ticks).unwrap_err()),
+        "servo count differs from the reference"
+    );
+    let mut opts = servo_options(CodecChoice::Index, 1.0, ServoRate::Rig, ServoNames::Strip);
+    opts.bound = Bound {
+        angle_deg: None,
+        ..opts.bound
+    };
+    assert_eq!(
+        message(&servo_clip::encode_servo_clip(&rig, &tracks, &opts).unwrap_err()),
+        "a servo clip needs a bound in degrees of servo travel (e.g. 0.5deg)"
+    );
+    let mut flat = rig.clone();
+    flat.servos[1].angle = [10.0, 10.0];
+    assert_eq!(
+        message(&servo_clip::rig_section(&flat).unwrap_err()),
+        format!(
+            "servo {}: angle range must be increasing",
+            flat.servos[1].name
+        )
+    );
+    let garbage =
+        message(&servo_clip::attach_rig(b"not a clip", &rig, ServoNames::Strip).unwrap_err());
+    assert!(garbage.starts_with("internal error: "), "{garbage}");
 }

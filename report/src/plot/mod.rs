@@ -15,14 +15,64 @@ use mocap_encoder::metrics::positions_mm;
 use mocap_encoder::motion::Motion;
 use style::{register_font, PALETTE};
 
+/// What plotters reports when an SVG picture cannot be drawn or written.
+pub type SvgError = DrawingAreaErrorKind<<SVGBackend<'static> as DrawingBackend>::ErrorType>;
+/// What plotters reports when a PNG picture cannot be drawn or written.
+pub type BitmapError = DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>;
+
 /// A picture that could not be drawn or written.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{}: {message}", path.display())]
-pub struct PlotError {
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlotError {
+    /// An SVG picture.
+    #[error("{}: {source}", path.display())]
+    Svg {
+        /// The picture's file.
+        path: PathBuf,
+        /// What plotters reported.
+        source: SvgError,
+    },
+    /// A PNG picture.
+    #[error("{}: {source}", path.display())]
+    Bitmap {
+        /// The picture's file.
+        path: PathBuf,
+        /// What plotters reported.
+        source: BitmapError,
+    },
+}
+
+impl PlotError {
     /// The picture's file.
-    pub path: PathBuf,
-    /// What plotters reported.
-    pub message: String,
+    pub fn path(&self) -> &Path {
+        match self {
+            PlotError::Svg { path, .. } | PlotError::Bitmap { path, .. } => path,
+        }
+    }
+}
+
+/// Draws one picture with `svg` or `bitmap` by the file's extension.
+pub(crate) fn with_backend(
+    path: &Path,
+    size: (u32, u32),
+    svg: impl FnOnce(DrawingArea<SVGBackend, Shift>) -> Result<(), SvgError>,
+    bitmap: impl FnOnce(DrawingArea<BitMapBackend, Shift>) -> Result<(), BitmapError>,
+) -> Result<(), PlotError> {
+    register_font();
+    let path_buf = || path.to_path_buf();
+    if is_svg(path) {
+        svg(SVGBackend::new(path, size).into_drawing_area()).map_err(|source| PlotError::Svg {
+            path: path_buf(),
+            source,
+        })
+    } else {
+        bitmap(BitMapBackend::new(path, size).into_drawing_area()).map_err(|source| {
+            PlotError::Bitmap {
+                path: path_buf(),
+                source,
+            }
+        })
+    }
 }
 
 /// Per-frame joint-position error of `decoded` against `original` (same
@@ -56,24 +106,6 @@ fn is_svg(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
 }
 
-fn with_backend(
-    path: &Path,
-    size: (u32, u32),
-    f: impl Fn(DrawingArea<SVGBackend, Shift>) -> Result<(), String>,
-    g: impl Fn(DrawingArea<BitMapBackend, Shift>) -> Result<(), String>,
-) -> Result<(), PlotError> {
-    register_font();
-    let r = if is_svg(path) {
-        f(SVGBackend::new(path, size).into_drawing_area())
-    } else {
-        g(BitMapBackend::new(path, size).into_drawing_area())
-    };
-    r.map_err(|message| PlotError {
-        path: path.to_path_buf(),
-        message,
-    })
-}
-
 /// `mocap eval --plot`: RMS and max joint error per frame.
 pub fn frame_error_plot(
     path: &Path,
@@ -101,12 +133,8 @@ fn draw_frame_errors<DB: DrawingBackend>(
     errs: &[(f64, f64)],
     dt: f64,
     name: &str,
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    root.fill(&WHITE).map_err(e)?;
+) -> DrawResult<(), DB> {
+    root.fill(&WHITE)?;
     let t1 = (errs.len().max(2) - 1) as f64 * dt;
     let ymax = errs.iter().map(|x| x.1).fold(0.0, f64::max).max(1e-6) * 1.1;
     let arms = errs.iter().map(|x| x.0).sum::<f64>() / errs.len().max(1) as f64;
@@ -118,15 +146,13 @@ where
         )
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(0.0..t1, 0.0..ymax)
-        .map_err(e)?;
+        .build_cartesian_2d(0.0..t1, 0.0..ymax)?;
     chart
         .configure_mesh()
         .x_desc("time (s)")
         .y_desc("error (mm)")
         .label_style(("sans-serif", 15))
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     type Pick = fn(&(f64, f64)) -> f64;
     let series: [(&str, RGBColor, Pick); 2] = [
         ("max over joints", PALETTE[3], |x| x.1),
@@ -139,8 +165,7 @@ where
                     .enumerate()
                     .map(|(i, x)| (i as f64 * dt, pick(x))),
                 colour.stroke_width(1),
-            ))
-            .map_err(e)?
+            ))?
             .label(label)
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
@@ -152,9 +177,8 @@ where
         .border_style(BLACK)
         .label_font(("sans-serif", 16))
         .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(e)?;
-    root.present().map_err(e)?;
+        .draw()?;
+    root.present()?;
     Ok(())
 }
 
@@ -170,12 +194,8 @@ pub fn rate_distortion_plot(path: &Path, rows: &[Row]) -> Result<(), PlotError> 
     )
 }
 
-fn draw_rd<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, rows: &[Row]) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    root.fill(&WHITE).map_err(e)?;
+fn draw_rd<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, rows: &[Row]) -> DrawResult<(), DB> {
+    root.fill(&WHITE)?;
     let xmax = rows
         .iter()
         .map(|r| r.metrics.arms_mm)
@@ -196,15 +216,13 @@ where
         )
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(0.0..xmax, 0.0..ymax)
-        .map_err(e)?;
+        .build_cartesian_2d(0.0..xmax, 0.0..ymax)?;
     chart
         .configure_mesh()
         .x_desc("ARMS (mm)")
         .y_desc("compression ratio (f32 / clip bytes)")
         .label_style(("sans-serif", 15))
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     // One grey line per file through its bounds (sorted by ARMS).
     let mut files: Vec<(&str, &str)> = rows
         .iter()
@@ -219,12 +237,10 @@ where
             .map(|r| (r.metrics.arms_mm, r.metrics.ratio_f32))
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                pts,
-                RGBColor(190, 190, 190).stroke_width(1),
-            )))
-            .map_err(e)?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            pts,
+            RGBColor(190, 190, 190).stroke_width(1),
+        )))?;
     }
     // One series per codec and bound (the index codec is the only one today).
     let mut bounds: Vec<&str> = Vec::new();
@@ -236,12 +252,9 @@ where
     for (i, b) in bounds.iter().enumerate() {
         let colour = PALETTE[i % PALETTE.len()];
         chart
-            .draw_series(
-                rows.iter().filter(|r| r.bound == *b).map(|r| {
-                    Circle::new((r.metrics.arms_mm, r.metrics.ratio_f32), 4, colour.filled())
-                }),
-            )
-            .map_err(e)?
+            .draw_series(rows.iter().filter(|r| r.bound == *b).map(|r| {
+                Circle::new((r.metrics.arms_mm, r.metrics.ratio_f32), 4, colour.filled())
+            }))?
             .label(format!("index @ {b}"))
             .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
     }
@@ -251,8 +264,27 @@ where
         .border_style(BLACK)
         .label_font(("sans-serif", 16))
         .position(SeriesLabelPosition::LowerRight)
-        .draw()
-        .map_err(e)?;
-    root.present().map_err(e)?;
+        .draw()?;
+    root.present()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A picture that cannot be written names its file, then what plotters
+    /// reported, for either backend.
+    #[test]
+    fn unwritable_picture_names_its_file() {
+        for name in ["rd.svg", "rd.png"] {
+            let path = Path::new("/nonexistent-mocap-dir").join(name);
+            let e = rate_distortion_plot(&path, &[]).unwrap_err();
+            assert_eq!(e.path(), path);
+            let text = e.to_string();
+            let want = format!("{}: backend error: ", path.display());
+            assert!(text.starts_with(&want), "{text}");
+            assert!(std::error::Error::source(&e).is_some());
+        }
+    }
 }

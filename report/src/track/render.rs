@@ -17,8 +17,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::Track;
-use crate::plot::style::register_font;
-use crate::plot::PlotError;
+use crate::plot::{with_backend, PlotError};
 
 /// Fill of the key-frame markers.
 pub const KEY_COLOUR: RGBColor = RGBColor(0x80, 0x80, 0x80);
@@ -46,34 +45,12 @@ pub fn render_view(
     key_xy: &[[f64; 2]],
     zoom: bool,
 ) -> Result<(), PlotError> {
-    register_font();
-    let size = (1300u32, 1000u32);
-    let svg = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-    let r = if svg {
-        draw(
-            SVGBackend::new(path, size).into_drawing_area(),
-            title,
-            tracks,
-            key_xy,
-            zoom,
-            Stroke::Polyline,
-        )
-    } else {
-        draw(
-            BitMapBackend::new(path, size).into_drawing_area(),
-            title,
-            tracks,
-            key_xy,
-            zoom,
-            Stroke::Segments,
-        )
-    };
-    r.map_err(|message| PlotError {
-        path: path.to_path_buf(),
-        message,
-    })
+    with_backend(
+        path,
+        (1300, 1000),
+        |a| draw(a, title, tracks, key_xy, zoom, Stroke::Polyline),
+        |a| draw(a, title, tracks, key_xy, zoom, Stroke::Segments),
+    )
 }
 
 fn lerp(a: RGBColor, b: RGBColor, t: f64) -> RGBColor {
@@ -125,12 +102,8 @@ fn draw<DB: DrawingBackend>(
     key_xy: &[[f64; 2]],
     zoom: bool,
     stroke: Stroke,
-) -> Result<(), String>
-where
-    DB::ErrorType: 'static,
-{
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    root.fill(&BACKGROUND).map_err(e)?;
+) -> DrawResult<(), DB> {
+    root.fill(&BACKGROUND)?;
     let (w, h) = root.dim_in_pixel();
     let (plot, side) = root.split_horizontally(h.min(w));
     // Square data range over key frames and tracks.
@@ -159,20 +132,17 @@ where
     let mut chart = ChartBuilder::on(&plot)
         .margin(20)
         .caption(title, ("sans-serif", 19).into_font().color(&white))
-        .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
-        .map_err(e)?;
+        .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)?;
     // Key frames: one square each.
-    chart
-        .draw_series(
-            key_xy
-                .iter()
-                .filter(|p| (p[0] - cx).abs() <= half && (p[1] - cy).abs() <= half)
-                .map(|p| {
-                    EmptyElement::at((p[0], p[1]))
-                        + Rectangle::new([(-3, -3), (3, 3)], KEY_COLOUR.filled())
-                }),
-        )
-        .map_err(e)?;
+    chart.draw_series(
+        key_xy
+            .iter()
+            .filter(|p| (p[0] - cx).abs() <= half && (p[1] - cy).abs() <= half)
+            .map(|p| {
+                EmptyElement::at((p[0], p[1]))
+                    + Rectangle::new([(-3, -3), (3, 3)], KEY_COLOUR.filled())
+            }),
+    )?;
     // Brightness scale: 95th percentile of all speeds is white.
     let mut all: Vec<f64> = tracks
         .iter()
@@ -184,24 +154,18 @@ where
         let line = base.stroke_width(2);
         let pts: Vec<(f64, f64)> = t.xy.iter().map(|p| (p[0], p[1])).collect();
         match stroke {
-            Stroke::Polyline => chart
-                .draw_series(std::iter::once(PathElement::new(pts, line)))
-                .map_err(e)?,
-            Stroke::Segments => chart
-                .draw_series(
-                    pts.windows(2)
-                        .filter(|s| s[0] != s[1])
-                        .map(|s| PathElement::new(s.to_vec(), line)),
-                )
-                .map_err(e)?,
+            Stroke::Polyline => chart.draw_series(std::iter::once(PathElement::new(pts, line)))?,
+            Stroke::Segments => chart.draw_series(
+                pts.windows(2)
+                    .filter(|s| s[0] != s[1])
+                    .map(|s| PathElement::new(s.to_vec(), line)),
+            )?,
         };
-        chart
-            .draw_series(
-                t.xy.iter().zip(&t.speed).map(|(p, &v)| {
-                    Circle::new((p[0], p[1]), 2, speed_colour(base, v / vmax).filled())
-                }),
-            )
-            .map_err(e)?;
+        chart.draw_series(
+            t.xy.iter()
+                .zip(&t.speed)
+                .map(|(p, &v)| Circle::new((p[0], p[1]), 2, speed_colour(base, v / vmax).filled())),
+        )?;
     }
     // Legend on the side panel: what each mark means, then the clips.
     let font = ("sans-serif", 20).into_font().color(&white);
@@ -210,34 +174,26 @@ where
         .into_font()
         .color(&RGBColor(170, 170, 175));
     let mut y = 30;
-    side.draw(&Text::new("clips", (10, y), font.clone()))
-        .map_err(e)?;
+    side.draw(&Text::new("clips", (10, y), font.clone()))?;
     y += 32;
     for (i, t) in tracks.iter().enumerate() {
         let base = PALETTE[i % PALETTE.len()];
         // A bar, not a path: the SVG keeps one polyline per clip.
-        side.draw(&Rectangle::new([(10, y + 9), (40, y + 11)], base.filled()))
-            .map_err(e)?;
-        side.draw(&Circle::new((25, y + 10), 4, base.filled()))
-            .map_err(e)?;
-        side.draw(&Text::new(t.name.clone(), (50, y), small.clone()))
-            .map_err(e)?;
+        side.draw(&Rectangle::new([(10, y + 9), (40, y + 11)], base.filled()))?;
+        side.draw(&Circle::new((25, y + 10), 4, base.filled()))?;
+        side.draw(&Text::new(t.name.clone(), (50, y), small.clone()))?;
         y += 28;
     }
     y += 22;
     side.draw(&Rectangle::new(
         [(22, y + 4), (28, y + 10)],
         KEY_COLOUR.filled(),
-    ))
-    .map_err(e)?;
-    side.draw(&Text::new("key frame", (50, y - 2), small.clone()))
-        .map_err(e)?;
+    ))?;
+    side.draw(&Text::new("key frame", (50, y - 2), small.clone()))?;
     y += 34;
-    side.draw(&Text::new("dot brightness: mean", (10, y), small.clone()))
-        .map_err(e)?;
+    side.draw(&Text::new("dot brightness: mean", (10, y), small.clone()))?;
     y += 22;
-    side.draw(&Text::new("joint angular speed", (10, y), small.clone()))
-        .map_err(e)?;
+    side.draw(&Text::new("joint angular speed", (10, y), small.clone()))?;
     y += 28;
     for s in 0..=10 {
         let t = f64::from(s) / 10.0;
@@ -245,25 +201,23 @@ where
         side.draw(&Rectangle::new(
             [(10 + s * 22, y), (32 + s * 22, y + 14)],
             c.filled(),
-        ))
-        .map_err(e)?;
+        ))?;
     }
     y += 20;
-    side.draw(&Text::new("0 °/s", (10, y), grey.clone()))
-        .map_err(e)?;
+    side.draw(&Text::new("0 °/s", (10, y), grey.clone()))?;
     side.draw(&Text::new(
         format!("≥ {vmax:.0} °/s"),
         (176, y),
         grey.clone(),
-    ))
-    .map_err(e)?;
-    root.present().map_err(e)?;
+    ))?;
+    root.present()?;
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plot::style::register_font;
 
     /// A track that nearly reverses at every frame, drawn to a bitmap: with
     /// one wide polyline plotters' join vertices shoot spikes across the
