@@ -1,5 +1,6 @@
 //! The container (SPEC.md §2): magic, version, section table, CRC-32.
 
+use crate::codec::{open_codec, Codec};
 use crate::consts::{self, CRC_LEN, MAX_SECTIONS, PREAMBLE_LEN, SECTION_ENTRY_LEN};
 use crate::error::Error;
 use crate::header::Header;
@@ -68,12 +69,8 @@ pub struct Clip<'a> {
     header: Header<'a>,
     codec_id: u8,
     rig: Option<Rig<'a>>,
-    // Read only by codecs, all of which may be compiled out.
-    #[cfg_attr(
-        not(any(feature = "codec-index", feature = "codec-pca-spline")),
-        allow(dead_code)
-    )]
-    codec: &'a [u8],
+    /// The codec section, validated once here for every player.
+    codec: Codec<'a>,
 }
 
 impl<'a> Clip<'a> {
@@ -162,7 +159,7 @@ impl<'a> Clip<'a> {
             id: consts::SECTION_HEADER,
         })?;
         let header = Header::parse(header, header_id == consts::SECTION_HEADER_COMPACT)?;
-        let (codec_id, codec) = codec.ok_or(Error::ContainerNoCodec)?;
+        let (codec_id, codec_bytes) = codec.ok_or(Error::ContainerNoCodec)?;
         // The servo form of the header describes nothing but a servo count:
         // only a rig table (which lists every servo) gives it meaning.
         if header.is_servo_form() && rig.is_none() {
@@ -173,18 +170,22 @@ impl<'a> Clip<'a> {
         let rig = rig
             .map(|r| Rig::parse(r, header.channel_count()))
             .transpose()?;
-        let clip = Clip {
+        // Validate the codec section now so that playing never meets a
+        // structural error later.
+        let codec = open_codec(
+            codec_id,
+            codec_bytes,
+            header.channel_count(),
+            header.frame_count(),
+        )?;
+        Ok(Clip {
             bytes,
             section_count: count,
             header,
             codec_id,
             rig,
             codec,
-        };
-        // Validate the codec section now so that playing never meets a
-        // structural error later.
-        crate::player::validate_codec(&clip)?;
-        Ok(clip)
+        })
     }
 
     /// The header: timing, skeleton, channel table.
@@ -208,12 +209,8 @@ impl<'a> Clip<'a> {
         self.codec_id
     }
 
-    /// The codec section's bytes.
-    #[cfg_attr(
-        not(any(feature = "codec-index", feature = "codec-pca-spline")),
-        allow(dead_code)
-    )]
-    pub(crate) fn codec_bytes(&self) -> &'a [u8] {
+    /// The validated codec section.
+    pub(crate) fn codec(&self) -> Codec<'a> {
         self.codec
     }
 

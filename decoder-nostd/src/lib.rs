@@ -29,11 +29,6 @@ extern crate std;
 #[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
 mod bits;
 mod clip;
-#[cfg(any(
-    feature = "codec-index",
-    feature = "codec-pca-spline",
-    feature = "codec-predictive"
-))]
 mod codec;
 pub mod consts;
 mod error;

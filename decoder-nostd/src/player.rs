@@ -2,61 +2,8 @@
 //! over a fixed-size state owned by the caller's stack or a `static`.
 
 use crate::clip::Clip;
-#[cfg(feature = "codec-index")]
-use crate::codec::index::IndexCodec;
-#[cfg(feature = "codec-pca-spline")]
-use crate::codec::pca_spline::{Cursor, PcaSplineCodec};
-#[cfg(feature = "codec-predictive")]
-use crate::codec::predictive::PredictiveCodec;
-#[cfg(any(
-    feature = "codec-index",
-    feature = "codec-pca-spline",
-    feature = "codec-predictive"
-))]
-use crate::consts;
+use crate::codec::Codec;
 use crate::error::Error;
-
-/// The codec of a clip, validated.
-#[derive(Clone, Copy, Debug)]
-enum Codec<'a> {
-    #[cfg(feature = "codec-index")]
-    Index(IndexCodec<'a>),
-    #[cfg(feature = "codec-pca-spline")]
-    PcaSpline(PcaSplineCodec<'a>),
-    #[cfg(feature = "codec-predictive")]
-    Predictive(PredictiveCodec<'a>),
-    #[allow(dead_code)]
-    None(core::marker::PhantomData<&'a ()>),
-}
-
-fn open_codec<'a>(clip: &Clip<'a>) -> Result<Codec<'a>, Error> {
-    match clip.codec_id() {
-        #[cfg(feature = "codec-index")]
-        consts::SECTION_CODEC_INDEX => Ok(Codec::Index(IndexCodec::parse(
-            clip.codec_bytes(),
-            clip.header().channel_count(),
-            clip.header().frame_count(),
-        )?)),
-        #[cfg(feature = "codec-pca-spline")]
-        consts::SECTION_CODEC_PCA_SPLINE => Ok(Codec::PcaSpline(PcaSplineCodec::parse(
-            clip.codec_bytes(),
-            clip.header().channel_count(),
-            clip.header().frame_count(),
-        )?)),
-        #[cfg(feature = "codec-predictive")]
-        consts::SECTION_CODEC_PREDICTIVE => Ok(Codec::Predictive(PredictiveCodec::parse(
-            clip.codec_bytes(),
-            clip.header().channel_count(),
-            clip.header().frame_count(),
-        )?)),
-        _ => Err(Error::ContainerNoCodec),
-    }
-}
-
-/// Validates the codec section of a clip (called by [`Clip::parse`]).
-pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
-    open_codec(clip).map(|_| ())
-}
 
 /// Plays a clip of at most `N` channels.
 ///
@@ -82,7 +29,7 @@ pub struct Player<'a, const N: usize> {
     cursor: u32,
     /// Where the `pca-spline` codec is in its segment list.
     #[cfg(feature = "codec-pca-spline")]
-    segment: Cursor<'a>,
+    segment: crate::codec::pca_spline::Cursor<'a>,
     /// `index`: the frame `state_frame`; `pca-spline`: its cache of key
     /// intervals (a larger `N` caches more groups).
     state: [i32; N],
@@ -99,7 +46,7 @@ impl<'a, const N: usize> Player<'a, N> {
                 capacity: N,
             });
         }
-        let codec = open_codec(clip)?;
+        let codec = clip.codec();
         #[cfg(feature = "codec-predictive")]
         if let Codec::Predictive(c) = &codec {
             if c.state_words() > N {
@@ -117,7 +64,7 @@ impl<'a, const N: usize> Player<'a, N> {
             state_frame: None,
             cursor: 0,
             #[cfg(feature = "codec-pca-spline")]
-            segment: Cursor::default(),
+            segment: crate::codec::pca_spline::Cursor::default(),
             state: [0; N],
         })
     }
