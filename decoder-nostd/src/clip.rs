@@ -223,3 +223,55 @@ impl<'a> Clip<'a> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec::Vec;
+
+    /// A container of `sections` (SPEC.md §2) with its CRC.
+    fn container(sections: &[(u8, &[u8])]) -> Vec<u8> {
+        let mut b = Vec::from(consts::MAGIC);
+        b.extend([consts::VERSION, 0]);
+        b.extend((sections.len() as u16).to_le_bytes());
+        let mut at = PREAMBLE_LEN + sections.len() * SECTION_ENTRY_LEN;
+        for (id, bytes) in sections {
+            b.extend([*id, 0, 0, 0]);
+            b.extend((at as u32).to_le_bytes());
+            b.extend((bytes.len() as u32).to_le_bytes());
+            at += bytes.len();
+        }
+        for (_, bytes) in sections {
+            b.extend_from_slice(bytes);
+        }
+        let crc = CRC32.checksum(&b);
+        b.extend(crc.to_le_bytes());
+        b
+    }
+
+    /// Compact header: 1 ns, 1 frame, 1 nm, no joints (so no channels).
+    const HEADER: &[u8] = &[1, 1, 1, 0];
+    /// An `index` section for no channels: no key interval, no groups, no
+    /// table, no payload.
+    const INDEX: &[u8] = &[0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+
+    #[test]
+    fn a_second_codec_section_is_a_duplicate() {
+        let one = container(&[(consts::SECTION_HEADER_COMPACT, HEADER), (0x10, INDEX)]);
+        #[cfg(feature = "codec-index")]
+        assert!(Clip::parse(&one).is_ok());
+        let _ = one;
+        // The same codec twice, or another codec beside it.
+        for id in [0x10, 0x11, 0x12] {
+            let two = container(&[
+                (consts::SECTION_HEADER_COMPACT, HEADER),
+                (0x10, INDEX),
+                (id, INDEX),
+            ]);
+            assert_eq!(
+                Clip::parse(&two).err(),
+                Some(Error::ContainerDuplicateSection { id })
+            );
+        }
+    }
+}

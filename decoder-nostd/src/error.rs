@@ -71,8 +71,15 @@ pub enum Error {
         /// Byte offset inside the header section.
         offset: usize,
     },
-    /// The frame time is zero or the clip has no frames (§3.1).
+    /// The frame time is zero or the clip has no frames (§3.2).
     HeaderTiming,
+    /// `source_unit_nm` is zero (§3.2).
+    HeaderSourceUnit,
+    /// An End Site joint declares channels (§3.2, §3.4).
+    HeaderEndSiteChannels {
+        /// The joint index.
+        joint: u32,
+    },
     /// A joint's parent is not an earlier joint (§3.2).
     HeaderParent {
         /// The joint index.
@@ -198,6 +205,10 @@ impl fmt::Display for Error {
             Error::HeaderMalformed { offset } => write!(f, "malformed header at byte {offset}"),
             Error::HeaderUtf8 { offset } => write!(f, "header name at byte {offset} is not UTF-8"),
             Error::HeaderTiming => f.write_str("frame time is zero or the clip has no frames"),
+            Error::HeaderSourceUnit => f.write_str("source unit is 0 nm"),
+            Error::HeaderEndSiteChannels { joint } => {
+                write!(f, "End Site joint {joint} has channels")
+            }
             Error::HeaderParent { joint } => write!(f, "joint {joint} has an invalid parent"),
             Error::HeaderChannelKind { code } => write!(f, "unknown channel kind {code}"),
             Error::HeaderUnit { code } => write!(f, "unknown channel unit {code}"),
@@ -239,5 +250,5 @@ impl fmt::Display for Error {
     }
 }
 
-#[cfg(feature = "std")]
-impl std::error::Error for Error {}
+/// `core::error::Error`, so no `std` is needed for `?` into a boxed error.
+impl core::error::Error for Error {}

@@ -23,11 +23,11 @@
     )
 )]
 
-#[cfg(feature = "std")]
-extern crate std;
-
 #[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
 mod bits;
+#[cfg(test)]
+extern crate std;
+
 mod clip;
 mod codec;
 pub mod consts;

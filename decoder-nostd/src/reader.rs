@@ -57,7 +57,9 @@ impl<'a> Reader<'a> {
     }
 
     /// LEB128 varint of at most 5 bytes whose value fits in `u32`
-    /// (postcard's `varint(u32)`); over-long or overflowing encodings fail.
+    /// (postcard's `varint(u32)`, SPEC.md §3.1): longer, unterminated or
+    /// overflowing encodings fail; over-long ones of at most 5 bytes
+    /// (`80 00` for 0) are accepted, as postcard accepts them.
     #[inline]
     pub(crate) fn varint_u32(&mut self) -> Option<u32> {
         // One-byte values (most lengths, counts and small numbers) first.
@@ -126,6 +128,30 @@ mod tests {
             None
         );
         assert_eq!(Reader::new(&[0x80, 0x80]).varint_u32(), None);
+    }
+
+    /// One test per row of SPEC.md §3.1's canonical-vs-accepted table.
+    #[test]
+    fn varint_canonical_and_accepted() {
+        let read = |b: &[u8]| {
+            let mut r = Reader::new(b);
+            r.varint_u32().map(|v| (v, r.pos()))
+        };
+        // Canonical: the shortest form, the only one the encoder writes.
+        assert_eq!(read(&[0x00]), Some((0, 1)));
+        assert_eq!(read(&[0xAC, 0x02]), Some((300, 2)));
+        assert_eq!(read(&[0xFF, 0xFF, 0xFF, 0xFF, 0x0F]), Some((u32::MAX, 5)));
+        // Over-long (zero groups at the top) within 5 bytes: accepted.
+        assert_eq!(read(&[0x80, 0x00]), Some((0, 2)));
+        assert_eq!(read(&[0xAC, 0x82, 0x80, 0x80, 0x00]), Some((300, 5)));
+        // Six bytes or more: rejected, even with a value that fits.
+        assert_eq!(read(&[0x80, 0x80, 0x80, 0x80, 0x80, 0x00]), None);
+        // Fifth byte above 0x0F (the value needs more than 32 bits): rejected.
+        assert_eq!(read(&[0xFF, 0xFF, 0xFF, 0xFF, 0x10]), None);
+        assert_eq!(read(&[0x80, 0x80, 0x80, 0x80, 0x70]), None);
+        // Unterminated at the end of the input: rejected.
+        assert_eq!(read(&[0x80]), None);
+        assert_eq!(read(&[]), None);
     }
 
     #[test]

@@ -59,7 +59,8 @@ impl RigServo {
     }
 
     /// The pulse for a decoded angle: clamped to the travel, then linear
-    /// between the two ends, rounded half up (integer arithmetic).
+    /// between the two ends, rounded half away from zero (integer
+    /// arithmetic, SPEC.md §3.5).
     pub fn pulse_qus(&self, angle_mdeg: i32) -> u16 {
         let (lo, hi) = (i64::from(self.angle_lo_mdeg), i64::from(self.angle_hi_mdeg));
         let a = i64::from(angle_mdeg).clamp(lo, hi);
