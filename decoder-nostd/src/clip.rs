@@ -6,16 +6,7 @@ use crate::error::Error;
 use crate::header::Header;
 use crate::reader::Reader;
 use crate::rig::Rig;
-
-/// CRC-32/ISO-HDLC (the zlib/PNG CRC), SPEC.md §2.3. With the `crc-table`
-/// feature a 1 KB table in flash makes it about six times faster; without
-/// it the bitwise form costs no table.
-#[cfg(feature = "crc-table")]
-pub(crate) const CRC32: crc::Crc<u32, crc::Table<1>> =
-    crc::Crc::<u32, crc::Table<1>>::new(&crc::CRC_32_ISO_HDLC);
-#[cfg(not(feature = "crc-table"))]
-pub(crate) const CRC32: crc::Crc<u32, crc::NoTable> =
-    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+use crate::wire;
 
 /// One section of a clip: its id and its bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,7 +100,7 @@ impl<'a> Clip<'a> {
             [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
             _ => return Err(truncated(needed)),
         };
-        let computed = CRC32.checksum(body);
+        let computed = wire::crc32(body);
         if stored != computed {
             return Err(Error::ContainerCrcMismatch { stored, computed });
         }
@@ -244,7 +235,7 @@ mod tests {
         for (_, bytes) in sections {
             b.extend_from_slice(bytes);
         }
-        let crc = CRC32.checksum(&b);
+        let crc = wire::crc32(&b);
         b.extend(crc.to_le_bytes());
         b
     }

@@ -36,6 +36,8 @@ mod header;
 mod player;
 mod reader;
 mod rig;
+#[doc(hidden)]
+pub mod wire;
 
 pub use clip::{Clip, Section, Sections};
 pub use error::Error;

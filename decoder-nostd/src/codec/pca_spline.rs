@@ -13,6 +13,7 @@ use crate::consts::pca::{
 };
 use crate::error::Error;
 use crate::reader::Reader;
+use crate::wire;
 
 const K_MAX: usize = MAX_COMPONENTS as usize;
 
@@ -1342,27 +1343,14 @@ fn next_interval(
 }
 
 /// The component record (§5.3: u8 width, u8 shift, zigzag offset) at byte
-/// `p` of `comps`: width, shift, offset and the byte after it. One- and
-/// offsets of up to three bytes (almost all) without a [`Reader`].
+/// `p` of `comps`: width, shift, offset and the byte after it.
 #[inline(always)]
 fn comp_at(comps: &[u8], p: usize) -> Option<(u32, u32, i32, usize)> {
-    let zigzag = |u: u32| ((u >> 1) as i32) ^ -((u & 1) as i32);
-    match comps.get(p..)? {
-        &[wd, sh, o, ..] if o < 0x80 => Some((wd.into(), sh.into(), zigzag(o.into()), p + 3)),
-        &[wd, sh, o, o2, ..] if o2 < 0x80 => {
-            let u = u32::from(o & 0x7F) | u32::from(o2) << 7;
-            Some((wd.into(), sh.into(), zigzag(u), p + 4))
-        }
-        &[wd, sh, o, o2, o3, ..] if o3 < 0x80 => {
-            let u = u32::from(o & 0x7F) | u32::from(o2 & 0x7F) << 7 | u32::from(o3) << 14;
-            Some((wd.into(), sh.into(), zigzag(u), p + 5))
-        }
-        rest => {
-            let mut r = Reader::new(rest);
-            let (wd, sh, off) = (r.u8()?, r.u8()?, r.zigzag_i32()?);
-            Some((wd.into(), sh.into(), off, p + r.pos()))
-        }
-    }
+    let &[wd, sh] = comps.get(p..p.wrapping_add(2))? else {
+        return None;
+    };
+    let (u, next) = wire::varint_u32(comps, p.wrapping_add(2))?;
+    Some((wd.into(), sh.into(), wire::zigzag_decode(u), next))
 }
 
 /// `n ≤ 30` bits of `bytes` from bit `bit`, LSB-first (§4.4); bits past
