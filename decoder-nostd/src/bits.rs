@@ -41,11 +41,11 @@ impl<'a> BitReader<'a> {
             };
             self.acc |= half << self.avail;
             self.next_byte = at.wrapping_add(2);
-            self.avail += 16;
+            self.avail = self.avail.wrapping_add(16);
         }
-        let v = self.acc & ((1u32 << n) - 1);
+        let v = self.acc & (1u32 << n).wrapping_sub(1);
         self.acc >>= n;
-        self.avail -= n;
+        self.avail = self.avail.wrapping_sub(n);
         v
     }
 }
@@ -92,7 +92,7 @@ fn tail_word(bytes: &[u8], at: usize) -> u64 {
             .and_then(|j| bytes.get(j))
             .copied()
             .unwrap_or(0);
-        word |= u64::from(b) << (8 * i);
+        word |= u64::from(b) << i.wrapping_mul(8);
     }
     word
 }

@@ -32,7 +32,7 @@ impl<'a> Iterator for Sections<'a> {
         if self.left == 0 {
             return None;
         }
-        self.left -= 1;
+        self.left = self.left.wrapping_sub(1);
         let (id, range) = read_entry(&mut self.table)?;
         Some(Section {
             id,
@@ -89,12 +89,12 @@ impl<'a> Clip<'a> {
         if count == 0 || usize::from(count) > MAX_SECTIONS {
             return Err(Error::ContainerSectionCount { count });
         }
-        let body_start = PREAMBLE_LEN + usize::from(count) * SECTION_ENTRY_LEN;
-        let needed = body_start + CRC_LEN;
+        let body_start = PREAMBLE_LEN.wrapping_add(usize::from(count) * SECTION_ENTRY_LEN);
+        let needed = body_start.wrapping_add(CRC_LEN);
         if bytes.len() < needed {
             return Err(truncated(needed));
         }
-        let crc_at = bytes.len() - CRC_LEN;
+        let crc_at = bytes.len().wrapping_sub(CRC_LEN);
         let (body, crc_bytes) = bytes.split_at(crc_at);
         let stored = match crc_bytes {
             [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),

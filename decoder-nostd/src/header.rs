@@ -320,7 +320,7 @@ impl<'a> Header<'a> {
 
     /// Clip duration in microseconds: `frame_count × frame_time`.
     pub fn duration_us(&self) -> u64 {
-        u64::from(self.frame_count) * u64::from(self.frame_time_ns) / 1000
+        u64::from(self.frame_count).wrapping_mul(u64::from(self.frame_time_ns)) / 1000
     }
 
     /// True for a servo clip's header form (SPEC.md §3.4.1): one unnamed
@@ -466,7 +466,7 @@ fn read_channel(r: &mut Reader<'_>, form: Form) -> Result<(u8, i32, i32), Error>
         let scale =
             |v: i64| (v << COMPACT_RANGE_SHIFT).clamp(i32::MIN.into(), i32::MAX.into()) as i32;
         let min = scale(i64::from(lo));
-        let max = scale(i64::from(lo) + i64::from(span));
+        let max = scale(i64::from(lo).wrapping_add(i64::from(span)));
         return Ok((COMPACT_UNIT_FROM_KIND, min, max));
     }
     let unit = r.u8().ok_or_else(|| bad(r))?;
@@ -491,9 +491,9 @@ impl<'a> Iterator for JointIter<'a> {
         if self.left == 0 {
             return None;
         }
-        self.left -= 1;
+        self.left = self.left.wrapping_sub(1);
         let j = read_joint(&mut self.reader, self.form, self.index).ok();
-        self.index += 1;
+        self.index = self.index.wrapping_add(1);
         j
     }
 }
@@ -523,7 +523,7 @@ impl<'a> Iterator for ChannelIter<'a> {
                 Some(j) if self.kind_pos < j.kinds.len() => break,
                 Some(_) => {
                     self.current = self.joints.next();
-                    self.joint_index += 1;
+                    self.joint_index = self.joint_index.wrapping_add(1);
                     self.kind_pos = 0;
                 }
                 None => {
@@ -535,9 +535,9 @@ impl<'a> Iterator for ChannelIter<'a> {
         }
         let joint = self.current?;
         let code = *joint.kinds.get(self.kind_pos)?;
-        self.kind_pos += 1;
+        self.kind_pos = self.kind_pos.wrapping_add(1);
         let (unit, min, max) = read_channel(&mut self.table, self.form).ok()?;
-        self.left -= 1;
+        self.left = self.left.wrapping_sub(1);
         let kind = ChannelKind::from_code(code)?;
         let unit = match (self.form, kind.is_rotation()) {
             (Form::Full, _) => Unit::from_code(unit)?,

@@ -13,21 +13,24 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// The lints of Cargo.toml `[lints]` (no indexing, unwrap, expect, panic or
+// implicit overflow) hold for the library; tests may do all of these.
 #![cfg_attr(
-    not(test),
-    deny(
+    test,
+    allow(
         clippy::indexing_slicing,
         clippy::unwrap_used,
         clippy::expect_used,
-        clippy::panic
+        clippy::panic,
+        clippy::arithmetic_side_effects
     )
 )]
 
-#[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
-mod bits;
 #[cfg(test)]
 extern crate std;
 
+#[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
+mod bits;
 mod clip;
 mod codec;
 pub mod consts;

@@ -91,7 +91,7 @@ impl<'a, const N: usize> Player<'a, N> {
         }
         let i = self.cursor;
         self.frame(i, out)?;
-        self.cursor = i + 1;
+        self.cursor = i.wrapping_add(1);
         Ok(Some(i))
     }
 
@@ -136,9 +136,11 @@ impl<'a, const N: usize> Player<'a, N> {
         let out = self.output(out)?;
         let ns = t_us.saturating_mul(1000);
         let period = u64::from(self.frame_time_ns);
-        let whole = ns / period;
-        let frac = ((ns % period) << 16) / period;
-        let last = self.frames - 1;
+        let whole = ns.checked_div(period).unwrap_or(0);
+        let frac = (ns.checked_rem(period).unwrap_or(0) << 16)
+            .checked_div(period)
+            .unwrap_or(0);
+        let last = self.frames.wrapping_sub(1);
         let pos = if whole >= u64::from(last) {
             u64::from(last) << 16
         } else {
@@ -157,12 +159,14 @@ impl<'a, const N: usize> Player<'a, N> {
         if let Codec::Predictive(c) = self.codec {
             // The state holds two frames: frame i is `v2` once frame i + 1
             // is decoded, unless i + 1 starts a block.
-            if self.state_frame != Some(i + 1) || c.key_before(i + 1) == i + 1 {
+            if self.state_frame != Some(i.wrapping_add(1))
+                || c.key_before(i.wrapping_add(1)) == i.wrapping_add(1)
+            {
                 self.seek(i);
                 out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
-                self.seek(i + 1);
+                self.seek(i.wrapping_add(1));
             } else {
-                let v2 = self.state.get(self.channels..2 * self.channels);
+                let v2 = self.state.get(self.channels..self.channels.wrapping_mul(2));
                 out.copy_from_slice(v2.unwrap_or(&[]));
             }
             let next = self.state.get(..self.channels).unwrap_or(&[]);
@@ -175,7 +179,7 @@ impl<'a, const N: usize> Player<'a, N> {
         let now = self.state.get(..self.channels).unwrap_or(&[]);
         out.copy_from_slice(now);
         // Decode frame i + 1 into `out` without disturbing the state.
-        decode(&self.codec, i + 1, out);
+        decode(&self.codec, i.wrapping_add(1), out);
         for (o, &a) in out.iter_mut().zip(now) {
             *o = mix(a, *o, frac);
         }
@@ -198,7 +202,7 @@ impl<'a, const N: usize> Player<'a, N> {
         }
         let key = self.key_before(i);
         let start = match self.state_frame {
-            Some(s) if s < i && s >= key => s + 1,
+            Some(s) if s < i && s >= key => s.wrapping_add(1),
             _ => key,
         };
         let codec = self.codec;
@@ -227,7 +231,7 @@ impl<'a, const N: usize> Player<'a, N> {
 /// `a + (b − a) · frac / 2^16` in wrapping fixed point (SPEC.md §6).
 fn mix(a: i32, b: i32, frac: u64) -> i32 {
     let d = i64::from(b.wrapping_sub(a));
-    a.wrapping_add(((d * frac as i64) >> 16) as i32)
+    a.wrapping_add((d.wrapping_mul(frac as i64) >> 16) as i32)
 }
 
 /// Decodes frame `f` into `values`, which hold frame `f - 1` if `f` is not

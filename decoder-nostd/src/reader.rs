@@ -40,7 +40,7 @@ impl<'a> Reader<'a> {
 
     pub(crate) fn u8(&mut self) -> Option<u8> {
         let b = *self.bytes.get(self.pos)?;
-        self.pos += 1;
+        self.pos = self.pos.wrapping_add(1);
         Some(b)
     }
 

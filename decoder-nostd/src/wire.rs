@@ -38,36 +38,28 @@ pub const VARINT_MAX_LEN: usize = 5;
 /// `bytes` and the offset after it. At most [`VARINT_MAX_LEN`] bytes, the
 /// fifth at most `0x0F`; over-long forms within that are accepted, as
 /// postcard accepts them (SPEC.md §3.1's canonical-vs-accepted table).
-/// One- to three-byte forms (almost every varint of a clip) are read
-/// without a loop.
-#[inline(always)]
+#[inline]
 pub fn varint_u32(bytes: &[u8], at: usize) -> Option<(u32, usize)> {
-    match bytes.get(at..)? {
-        &[b, ..] if b < 0x80 => Some((u32::from(b), at.wrapping_add(1))),
-        &[b, b2, ..] if b2 < 0x80 => {
-            let u = u32::from(b & 0x7F) | u32::from(b2) << 7;
-            Some((u, at.wrapping_add(2)))
+    // One-byte values (most lengths, counts and small numbers) first.
+    if let Some(&b) = bytes.get(at) {
+        if b < 0x80 {
+            return Some((u32::from(b), at.wrapping_add(1)));
         }
-        &[b, b2, b3, ..] if b3 < 0x80 => {
-            let u = u32::from(b & 0x7F) | u32::from(b2 & 0x7F) << 7 | u32::from(b3) << 14;
-            Some((u, at.wrapping_add(3)))
-        }
-        rest => varint_long(rest).map(|(u, n)| (u, at.wrapping_add(n))),
     }
+    varint_long(bytes, at)
 }
 
-/// [`varint_u32`] of any length at the start of `bytes`: the value and
-/// its length.
-fn varint_long(bytes: &[u8]) -> Option<(u32, usize)> {
+/// [`varint_u32`] of any length.
+fn varint_long(bytes: &[u8], at: usize) -> Option<(u32, usize)> {
     let mut value: u32 = 0;
-    for (i, &b) in (0u32..).zip(bytes.iter().take(VARINT_MAX_LEN)) {
+    for (i, &b) in (0u32..).zip(bytes.get(at..)?.iter().take(VARINT_MAX_LEN)) {
         let chunk = u32::from(b & 0x7F);
         if i == 4 && chunk > 0x0F {
             return None;
         }
-        value |= chunk << (7 * i);
+        value |= chunk << i.wrapping_mul(7);
         if b & 0x80 == 0 {
-            return Some((value, i as usize + 1));
+            return Some((value, at.wrapping_add(i as usize).wrapping_add(1)));
         }
     }
     None

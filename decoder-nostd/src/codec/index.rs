@@ -78,7 +78,7 @@ impl<'a> IndexCodec<'a> {
             delta_bits: delta.bits,
         };
         let needed_bits = codec.frame_bit_offset(frames);
-        let available_bits = (payload.len() as u64) * 8;
+        let available_bits = (payload.len() as u64).wrapping_mul(8);
         if needed_bits.div_ceil(8) != payload.len() as u64 {
             return Err(Error::IndexPayloadTruncated {
                 needed_bits,
@@ -95,10 +95,9 @@ impl<'a> IndexCodec<'a> {
 
     /// The key frame at or before `frame`.
     pub(crate) fn key_before(&self, frame: u32) -> u32 {
-        if self.key_interval == 0 {
-            frame
-        } else {
-            frame - frame % self.key_interval
+        match frame.checked_rem(self.key_interval) {
+            Some(r) => frame.wrapping_sub(r),
+            None => frame, // no key interval: every frame is a key frame
         }
     }
 
@@ -109,8 +108,9 @@ impl<'a> IndexCodec<'a> {
         } else {
             u64::from(frame).div_ceil(u64::from(self.key_interval))
         };
-        let deltas = u64::from(frame) - keys;
-        keys * self.key_bits + deltas * self.delta_bits
+        let deltas = u64::from(frame).wrapping_sub(keys);
+        keys.wrapping_mul(self.key_bits)
+            .wrapping_add(deltas.wrapping_mul(self.delta_bits))
     }
 
     /// Decodes frame `frame` into `state`, which must hold frame `frame - 1`
@@ -165,8 +165,8 @@ fn decode_group<const ACCUMULATE: bool>(
         let word = u32::from_le_bytes([e[0], e[1], e[2], e[3]]);
         let base = i32::from_le_bytes([e[4], e[5], e[6], e[7]]);
         let idx = bits.read(width);
-        let at = (((word >> 16) + idx) as usize) * 2;
-        let entry = match table.get(at..at + 2) {
+        let at = ((word >> 16).wrapping_add(idx) as usize).wrapping_mul(2);
+        let entry = match table.get(at..at.wrapping_add(2)) {
             Some(&[lo, hi]) => i16::from_le_bytes([lo, hi]),
             _ => 0,
         };
@@ -212,16 +212,16 @@ fn check_set<'a>(
                 return Err(truncated);
             };
             let channel = u16::from_le_bytes([ch0, ch1]);
-            let end = u32::from(u16::from_le_bytes([o0, o1])) + (1u32 << width);
+            let end = u32::from(u16::from_le_bytes([o0, o1])).wrapping_add(1u32 << width);
             if usize::from(channel) >= channels || end > table_len {
                 return Err(Error::IndexDescriptor {
                     channel: u32::from(channel),
                 });
             }
         }
-        bits += u64::from(width) * count as u64;
-        entries += count as u64;
-        len += GROUP_HEADER_LEN + body.len();
+        bits = bits.wrapping_add(u64::from(width).wrapping_mul(count as u64));
+        entries = entries.wrapping_add(count as u64);
+        len = len.wrapping_add(GROUP_HEADER_LEN.wrapping_add(body.len()));
     }
     let bytes = start.clone().take(len).ok_or(truncated)?;
     Ok(SetInfo {

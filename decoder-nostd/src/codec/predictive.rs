@@ -60,7 +60,7 @@ impl<'a> PredictiveCodec<'a> {
                 r.zigzag_i32().ok_or(bad("truncated channel record"))?;
             } else {
                 let m = mode >> MODE_STEP_SHIFT;
-                if m == 0 || u64::from(m) * u64::from(unit) > u64::from(MAX_STEP) {
+                if m == 0 || u64::from(m).wrapping_mul(u64::from(unit)) > u64::from(MAX_STEP) {
                     return Err(bad("step must be 1 ..= 2^30"));
                 }
             }
@@ -73,7 +73,9 @@ impl<'a> PredictiveCodec<'a> {
         let at = r.pos();
         let mut total: u64 = 0;
         for _ in 0..blocks {
-            total += u64::from(r.varint_u32().ok_or(bad("truncated block table"))?);
+            total = total.wrapping_add(u64::from(
+                r.varint_u32().ok_or(bad("truncated block table"))?,
+            ));
         }
         let lengths = bytes.get(at..r.pos()).ok_or(bad("truncated"))?;
         let data = r.rest();
@@ -92,12 +94,14 @@ impl<'a> PredictiveCodec<'a> {
 
     /// Player state words this clip needs.
     pub(crate) fn state_words(&self) -> usize {
-        3 * self.channels + STATE_EXTRA_WORDS
+        self.channels
+            .wrapping_mul(3)
+            .wrapping_add(STATE_EXTRA_WORDS)
     }
 
     /// The first frame of the block holding `frame`.
     pub(crate) fn key_before(&self, frame: u32) -> u32 {
-        frame - frame % self.block_frames
+        frame.wrapping_sub(frame.checked_rem(self.block_frames).unwrap_or(0))
     }
 
     /// Byte range of block `b` in `data`.
@@ -128,11 +132,11 @@ impl<'a> PredictiveCodec<'a> {
         let Some((probs, coder)) = rest.split_at_mut_checked(PROB_WORDS) else {
             return;
         };
-        let j = frame % self.block_frames;
+        let j = frame.checked_rem(self.block_frames).unwrap_or(0);
         let mut rc = if j == 0 {
-            probs.fill(i32::from(PROB_INIT) * 0x1_0001);
+            probs.fill(i32::from(PROB_INIT).wrapping_mul(0x1_0001));
             ctx.fill(0);
-            let (start, end) = self.block(frame / self.block_frames);
+            let (start, end) = self.block(frame.checked_div(self.block_frames).unwrap_or(0));
             RangeDecoder::start(self.data, start, end)
         } else {
             RangeDecoder::load(self.data, coder)
@@ -147,7 +151,7 @@ impl<'a> PredictiveCodec<'a> {
                 *x2 = k;
                 continue;
             }
-            let step = i64::from(mode >> MODE_STEP_SHIFT) * unit;
+            let step = i64::from(mode >> MODE_STEP_SHIFT).wrapping_mul(unit);
             let pred = predict(j, *x1, *x2, (mode & 3) as usize);
             let q = rc.residual(probs, (*cx as usize).min(CONTEXTS - 1));
             *x2 = *x1;
@@ -168,7 +172,7 @@ pub fn predict(j: u32, v1: i32, v2: i32, weight: usize) -> i64 {
         1 => p1,
         _ => {
             let a = PREDICTOR_WEIGHTS.get(weight).copied().unwrap_or(0);
-            p1 + ((a * (p1 - p2)) >> 2)
+            p1.wrapping_add(a.wrapping_mul(p1.wrapping_sub(p2)) >> 2)
         }
     }
 }
@@ -260,17 +264,17 @@ impl<'a> RangeDecoder<'a> {
         let Some(word) = probs.get_mut(i / 2) else {
             return 0;
         };
-        let shift = 16 * (i % 2) as u32;
+        let shift = ((i % 2) as u32).wrapping_mul(16);
         let mut p = ((*word as u32) >> shift) & 0xFFFF;
         let bound = (self.range >> PROB_BITS).wrapping_mul(p);
         let bit = if self.code < bound {
             self.range = bound;
-            p += ((1 << PROB_BITS) - p) >> MOVE_BITS;
+            p = p.wrapping_add((1u32 << PROB_BITS).wrapping_sub(p) >> MOVE_BITS);
             0
         } else {
             self.code = self.code.wrapping_sub(bound);
             self.range = self.range.wrapping_sub(bound);
-            p -= p >> MOVE_BITS;
+            p = p.wrapping_sub(p >> MOVE_BITS);
             1
         };
         *word = (((*word as u32) & !(0xFFFF << shift)) | (p << shift)) as i32;
@@ -293,29 +297,31 @@ impl<'a> RangeDecoder<'a> {
 
     /// A residual in context `cx` (SPEC.md §5b binarisation).
     fn residual(&mut self, probs: &mut [i32], cx: usize) -> i64 {
-        let base = cx * PROBS_PER_CONTEXT;
+        let base = cx.wrapping_mul(PROBS_PER_CONTEXT);
         if self.bit(probs, base) == 0 {
             return 0;
         }
-        let negative = self.bit(probs, base + 1) == 1;
+        let negative = self.bit(probs, base.wrapping_add(1)) == 1;
         let mut a: u32 = 1;
-        while a <= MAGNITUDE_STEPS && self.bit(probs, base + 1 + a as usize) == 1 {
-            a += 1;
+        while a <= MAGNITUDE_STEPS
+            && self.bit(probs, base.wrapping_add(1).wrapping_add(a as usize)) == 1
+        {
+            a = a.wrapping_add(1);
         }
         let mut magnitude = i64::from(a);
         if a > MAGNITUDE_STEPS {
             let mut n = 0;
             while n < MAX_ESCAPE_BITS && self.direct() == 1 {
-                n += 1;
+                n = n.wrapping_add(1);
             }
             let mut r: i64 = 0;
             for _ in 0..n {
                 r = (r << 1) | i64::from(self.direct());
             }
-            magnitude += (1i64 << n) - 1 + r;
+            magnitude = magnitude.wrapping_add((1i64 << n).wrapping_sub(1).wrapping_add(r));
         }
         if negative {
-            -magnitude
+            magnitude.wrapping_neg()
         } else {
             magnitude
         }

@@ -44,10 +44,10 @@ impl Cached {
         Cached {
             i: d & 0xFFFF,
             t1,
-            t2: t1 + (a & 0xFFFF),
+            t2: t1.wrapping_add(a & 0xFFFF),
             tb: d >> 16,
-            ra: (c & 0xFFFF) as i32 + 1,
-            rb: (c >> 16) as i32 + 1,
+            ra: ((c & 0xFFFF) as i32).wrapping_add(1),
+            rb: ((c >> 16) as i32).wrapping_add(1),
         }
     }
 
@@ -57,7 +57,7 @@ impl Cached {
         *iv = [
             self.t1 << FRAC_BITS | span,
             span << FRAC_BITS | last,
-            (self.ra - 1) as u32 | ((self.rb - 1) as u32) << 16,
+            self.ra.wrapping_sub(1) as u32 | (self.rb.wrapping_sub(1) as u32) << 16,
             self.i | self.tb << 16,
         ]
         .map(|w| w as i32);
@@ -77,8 +77,8 @@ pub(super) fn cached_weights(iv: &[i32; INTERVAL], rel: u32) -> Option<[i32; 4]>
     let u = d.checked_div(a & 0xFFFF).unwrap_or(0);
     Some(spline::weights_at(
         u,
-        (r & 0xFFFF) as i32 + 1,
-        (r >> 16) as i32 + 1,
+        ((r & 0xFFFF) as i32).wrapping_add(1),
+        ((r >> 16) as i32).wrapping_add(1),
     ))
 }
 
@@ -153,7 +153,9 @@ pub(super) fn next_interval(
 ) -> Option<()> {
     let at = Cached::of(iv);
     // The record: k, ms, n means (2 bytes), n × k basis, then m and tb.
-    let keys_at = rec.wrapping_add(2).wrapping_add(n.wrapping_mul(k + 2));
+    let keys_at = rec
+        .wrapping_add(2)
+        .wrapping_add(n.wrapping_mul(k.wrapping_add(2)));
     let mut r = Reader::new(body.get(keys_at..)?);
     let keys = r.varint_u32()?;
     let tb = u32::from(r.u8()?);
@@ -264,7 +266,7 @@ impl<'a> PcaSplineCodec<'a> {
                 target.copy(values);
                 continue;
             }
-            let size = GROUP_HEAD + INTERVAL + 4 * k;
+            let size = (GROUP_HEAD + INTERVAL).wrapping_add(k.wrapping_mul(4));
             let Some((slot, tail)) = core::mem::take(&mut slots).split_at_mut_checked(size) else {
                 return;
             };
@@ -278,7 +280,7 @@ impl<'a> PcaSplineCodec<'a> {
         let mut g = Reader::new(self.groups);
         for _ in 0..cached {
             let n = g.varint_u32().unwrap_or(0) as usize;
-            g.take(n * self.width());
+            g.take(n.wrapping_mul(self.width()));
         }
         let mut body = Reader::new(seg.body.get(rest..).unwrap_or(&[]));
         // A slot on the stack, evaluated like a cached one (refilled every
@@ -287,7 +289,7 @@ impl<'a> PcaSplineCodec<'a> {
         for _ in cached..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
             let idx_at = g.pos();
-            let idx = g.take(n * self.width()).unwrap_or(&[]);
+            let idx = g.take(n.wrapping_mul(self.width())).unwrap_or(&[]);
             let rec = body.pos();
             let Some(group) = read_group(&mut body, n) else {
                 return;
@@ -302,7 +304,7 @@ impl<'a> PcaSplineCodec<'a> {
             }
             let dst = self.dst_word(idx, idx_at, n);
             let hd = [
-                (rest + rec) as i32,
+                rest.wrapping_add(rec) as i32,
                 dst,
                 pack(n, group.k, group.mean_shift, dst),
             ];
@@ -327,7 +329,7 @@ impl<'a> PcaSplineCodec<'a> {
         if last.wrapping_sub(first) == n.wrapping_sub(1) {
             first as i32
         } else {
-            -1 - idx_at as i32
+            (-1i32).wrapping_sub(idx_at as i32)
         }
     }
     /// Evaluates a `k > 0` group from its slot (head, key interval, control
@@ -369,14 +371,16 @@ impl<'a> PcaSplineCodec<'a> {
         let (body, rel) = (pose.body, pose.rel);
         let (n, _, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
-        let controls = rest.get_mut(..4 * K)?;
+        let controls = rest.get_mut(..K.wrapping_mul(4))?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
             None => refill_slot(body, rec, n, K, rel, iv, controls)?,
         };
         let a = coefficients::<K>(w, controls);
-        let (means, basis) = body.get(rec + 2..)?.split_at_checked(2 * n)?;
+        let (means, basis) = body
+            .get(rec.wrapping_add(2)..)?
+            .split_at_checked(n.wrapping_mul(2))?;
         self.target(dst, n, pose.out)?
             .write_k::<K>(a, means, basis, ms);
         Some(())
@@ -390,14 +394,16 @@ impl<'a> PcaSplineCodec<'a> {
         let (body, rel) = (pose.body, pose.rel);
         let (n, k, ms) = unpack(nkm);
         let (iv, rest) = slot.split_first_chunk_mut::<INTERVAL>()?;
-        let controls = rest.get_mut(..4 * k)?;
+        let controls = rest.get_mut(..k.wrapping_mul(4))?;
         let rec = rec as usize;
         let w = match cached_weights(iv, rel) {
             Some(w) => w,
             None => refill_slot(body, rec, n, k, rel, iv, controls)?,
         };
-        let (means, basis) = body.get(rec + 2..)?.split_at_checked(2 * n)?;
-        let basis = basis.get(..n * k)?;
+        let (means, basis) = body
+            .get(rec.wrapping_add(2)..)?
+            .split_at_checked(n.wrapping_mul(2))?;
+        let basis = basis.get(..n.wrapping_mul(k))?;
         self.target(dst, n, pose.out)?
             .write(k, w, controls, means, basis, ms);
         Some(())
@@ -436,8 +442,10 @@ impl<'a> PcaSplineCodec<'a> {
         if let Ok(first) = usize::try_from(dst) {
             return out.get_mut(first..first.checked_add(n)?).map(Dst::Run);
         }
-        let at = usize::try_from(-1 - i64::from(dst)).ok()?;
-        let idx = self.groups.get(at..at.checked_add(n * self.width())?)?;
+        let at = usize::try_from((-1i64).wrapping_sub(i64::from(dst))).ok()?;
+        let idx = self
+            .groups
+            .get(at..at.checked_add(n.wrapping_mul(self.width()))?)?;
         Some(if self.wide {
             Dst::Wide(idx, out)
         } else {
@@ -462,24 +470,23 @@ impl<'a> PcaSplineCodec<'a> {
         for _ in 0..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
             let idx_at = g.pos();
-            let idx = g.take(n * self.width()).unwrap_or(&[]);
+            let idx = g.take(n.wrapping_mul(self.width())).unwrap_or(&[]);
             let rec = body.pos();
             let mut next = body.clone();
             let Some(group) = read_group(&mut next, n) else {
                 break;
             };
-            let size = GROUP_HEAD
-                + if group.k == 0 {
-                    n
-                } else {
-                    INTERVAL + 4 * group.k
-                };
+            let size = GROUP_HEAD.wrapping_add(if group.k == 0 {
+                n
+            } else {
+                INTERVAL.wrapping_add(group.k.wrapping_mul(4))
+            });
             let Some((slot, tail)) = core::mem::take(&mut free).split_at_mut_checked(size) else {
                 break;
             };
             free = tail;
             body = next;
-            count += 1;
+            count = count.wrapping_add(1);
             let Some((hd, rest)) = slot.split_first_chunk_mut::<GROUP_HEAD>() else {
                 break;
             };
@@ -503,7 +510,7 @@ impl<'a> PcaSplineCodec<'a> {
             for (d, v) in dst.iter_mut().zip(self.const_values()) {
                 *d = v;
             }
-            consts = (total - free.len()) as i32;
+            consts = total.wrapping_sub(free.len()) as i32;
         }
         if let [o, g, at, c] = head {
             (*o, *g, *at, *c) = (owner, count, body.pos() as i32, consts);
@@ -524,14 +531,14 @@ impl GroupHead<'_> {
         controls: &mut [i32],
     ) -> Cached {
         let last = self.keys.saturating_sub(1);
-        let next = at.i + 1;
+        let next = at.i.wrapping_add(1);
         let sequential = at.tb != at.t2
             && at.t2 << FRAC_BITS <= rel
-            && (rel < at.tb << FRAC_BITS || next + 1 == last)
+            && (rel < at.tb << FRAC_BITS || next.wrapping_add(1) == last)
             && next < last;
         let (i, t) = if sequential {
-            let tc = self.time((next + 2).min(last));
-            let row = self.key_row((next + 2).min(last));
+            let tc = self.time(next.wrapping_add(2).min(last));
+            let row = self.key_row(next.wrapping_add(2).min(last));
             let mut dst = controls.chunks_exact_mut(4);
             self.row_values(row, |p| {
                 if let Some([a, b, c, d]) =

@@ -39,7 +39,7 @@ pub(super) struct PatchScan {
 /// `(2^15 − 1)·2^16`, so it fits in 32 bits).
 pub(super) fn relative(seg: &Segment<'_>, pos: u64) -> u32 {
     pos.saturating_sub(u64::from(seg.start) << FRAC_BITS)
-        .min(u64::from(seg.end - seg.start) << FRAC_BITS) as u32
+        .min(u64::from(seg.end.wrapping_sub(seg.start)) << FRAC_BITS) as u32
 }
 
 impl<'a> PcaSplineCodec<'a> {
@@ -61,7 +61,7 @@ impl<'a> PcaSplineCodec<'a> {
             end,
             body,
             patches,
-            next: at + r.pos(),
+            next: at.wrapping_add(r.pos()),
         })
     }
     /// The segment holding `frame` (the last one starting at or before it).
@@ -135,10 +135,10 @@ impl<'a> PcaSplineCodec<'a> {
             }
             if f == frame {
                 if let Some(o) = out.get_mut(c) {
-                    *o = o.wrapping_add(((i64::from(v) * weight) >> FRAC_BITS) as i32);
+                    *o = o.wrapping_add((i64::from(v).wrapping_mul(weight) >> FRAC_BITS) as i32);
                 }
             } else {
-                (at, seen) = (base + r.pos(), f.saturating_add(1));
+                (at, seen) = (base.wrapping_add(r.pos()), f.saturating_add(1));
                 next = None;
             }
             last = f;

@@ -18,7 +18,7 @@ impl<'i, 'o> Dst<'i, 'o> {
     /// The destination of the channels listed in `idx`.
     pub(super) fn of(idx: &'i [u8], wide: bool, out: &'o mut [i32]) -> Option<Self> {
         let width = if wide { 2 } else { 1 };
-        let n = idx.len() / width;
+        let n = if wide { idx.len() >> 1 } else { idx.len() };
         let first = idx.get(..width).map_or(usize::MAX, index_of);
         let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
         // Indices strictly increase (checked by `parse`): n of them
@@ -156,7 +156,7 @@ impl<'i, 'o> Dst<'i, 'o> {
 #[inline(always)]
 pub(super) fn coefficients<const K: usize>(w: [i32; 4], controls: &[i32]) -> [i32; K] {
     let mut a = [0i32; K];
-    if let Some(controls) = controls.get(..4 * K) {
+    if let Some(controls) = controls.get(..K.wrapping_mul(4)) {
         for (c, p) in a.iter_mut().zip(controls.chunks_exact(4)) {
             if let &[p0, p1, p2, p3] = p {
                 *c = spline::apply(w, [p0, p1, p2, p3]);
@@ -210,9 +210,9 @@ impl<'h, 'a> GroupValues<'h, 'a> {
             return Some(self.means.zigzag_i32()?.wrapping_shl(h.mean_shift));
         }
         let mean = mean_of(self.means.take(2)?);
-        let at = self.row * h.k;
-        let row = h.basis.get(at..at + h.k)?;
-        self.row += 1;
+        let at = self.row.wrapping_mul(h.k);
+        let row = h.basis.get(at..at.wrapping_add(h.k))?;
+        self.row = self.row.wrapping_add(1);
         Some(channel_value(h, mean, row, self.coef))
     }
 }
@@ -221,7 +221,7 @@ impl<'h, 'a> GroupValues<'h, 'a> {
 pub(super) fn read_wide(bits: &mut BitReader<'_>, n: u32) -> u32 {
     let lo_n = n.min(15);
     let lo = bits.read(lo_n);
-    let hi = bits.read(n - lo_n);
+    let hi = bits.read(n.wrapping_sub(lo_n));
     lo | (hi << lo_n)
 }
 
@@ -231,7 +231,10 @@ impl<'a> PcaSplineCodec<'a> {
     pub(super) fn write_consts(&self, cached: Option<&[i32]>, out: &mut [i32]) {
         let mut r = Reader::new(self.consts);
         let n = self.const_count as usize;
-        let indices = Indices::new(r.take(n * self.width()).unwrap_or(&[]), self.wide);
+        let indices = Indices::new(
+            r.take(n.wrapping_mul(self.width())).unwrap_or(&[]),
+            self.wide,
+        );
         match cached {
             Some(values) if !self.wide => {
                 let idx = self.consts.get(..n).unwrap_or(&[]);
@@ -261,7 +264,7 @@ impl<'a> PcaSplineCodec<'a> {
     /// The constant channels' values in order.
     pub(super) fn const_values(&self) -> impl Iterator<Item = i32> + 'a {
         let mut r = Reader::new(self.consts);
-        r.take(self.const_count as usize * self.width());
+        r.take((self.const_count as usize).wrapping_mul(self.width()));
         (0..self.const_count).map(move |_| r.zigzag_i32().unwrap_or(0))
     }
     /// Blends the other segment of a window into `out`, which holds the
@@ -279,7 +282,8 @@ impl<'a> PcaSplineCodec<'a> {
         // E = earlier.end.
         let from = u64::from(later.start.saturating_sub(1)) << FRAC_BITS;
         let steps = u64::from(earlier.end.saturating_add(2).saturating_sub(later.start)).max(1);
-        let w = (pos.saturating_sub(from) / steps).min(1 << FRAC_BITS) as i64;
+        let w =
+            (pos.saturating_sub(from).checked_div(steps).unwrap_or(0)).min(1 << FRAC_BITS) as i64;
         let other = if cur_first { later } else { earlier };
         let rel = u64::from(relative(other, pos));
         let mut g = Reader::new(self.groups);
@@ -287,7 +291,7 @@ impl<'a> PcaSplineCodec<'a> {
         let mut coef = [0i32; K_MAX];
         for _ in 0..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
-            let idx = g.take(n * self.width()).unwrap_or(&[]);
+            let idx = g.take(n.wrapping_mul(self.width())).unwrap_or(&[]);
             let Some(head) = read_group(&mut body, n) else {
                 return;
             };
@@ -299,7 +303,7 @@ impl<'a> PcaSplineCodec<'a> {
                 };
                 let (a, b) = if cur_first { (*o, v) } else { (v, *o) };
                 let d = i64::from(b.wrapping_sub(a));
-                *o = a.wrapping_add(((d * w) >> FRAC_BITS) as i32);
+                *o = a.wrapping_add((d.wrapping_mul(w) >> FRAC_BITS) as i32);
             }
         }
     }
@@ -313,15 +317,20 @@ impl GroupHead<'_> {
         let time = |i: u32| self.time(i);
         let last = self.keys.saturating_sub(1);
         let (mut lo, mut hi) = (0u32, last);
-        while hi - lo > 1 {
-            let mid = lo + (hi - lo) / 2;
+        while hi.wrapping_sub(lo) > 1 {
+            let mid = lo.wrapping_add(hi.wrapping_sub(lo) / 2);
             if u64::from(time(mid)) << FRAC_BITS <= rel {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
-        let rows = [lo.saturating_sub(1), lo, lo + 1, (lo + 2).min(last)];
+        let rows = [
+            lo.saturating_sub(1),
+            lo,
+            lo.wrapping_add(1),
+            lo.wrapping_add(2).min(last),
+        ];
         (lo, rows.map(time))
     }
     /// Calls `each` with the four control values of every component at the
@@ -329,7 +338,12 @@ impl GroupHead<'_> {
     /// lockstep, one component at a time.
     pub(super) fn controls(&self, i: u32, mut each: impl FnMut([i32; 4])) {
         let last = self.keys.saturating_sub(1);
-        let rows = [i.saturating_sub(1), i, i + 1, (i + 2).min(last)];
+        let rows = [
+            i.saturating_sub(1),
+            i,
+            i.wrapping_add(1),
+            i.wrapping_add(2).min(last),
+        ];
         let mut at = rows.map(|row| self.key_row(row));
         let mut comps = Reader::new(self.comps);
         for _ in 0..self.k {
@@ -349,13 +363,15 @@ impl GroupHead<'_> {
     pub(super) fn time(&self, i: u32) -> u32 {
         bits_at64(
             self.bits,
-            u64::from(i) * u64::from(self.time_bits),
+            u64::from(i).wrapping_mul(u64::from(self.time_bits)),
             self.time_bits,
         )
     }
     /// The bit position of key row `row`.
     pub(super) fn key_row(&self, row: u32) -> u64 {
-        u64::from(self.keys) * u64::from(self.time_bits) + u64::from(row) * u64::from(self.row_bits)
+        u64::from(self.keys)
+            .wrapping_mul(u64::from(self.time_bits))
+            .wrapping_add(u64::from(row).wrapping_mul(u64::from(self.row_bits)))
     }
     /// Calls `each` with the control value of every component in the key
     /// row at bit `at`.

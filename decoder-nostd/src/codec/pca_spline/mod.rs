@@ -121,7 +121,7 @@ fn read_group<'a>(r: &mut Reader<'a>, n: usize) -> Option<GroupHead<'a>> {
         for _ in 0..n {
             r.zigzag_i32()?;
         }
-        let len = r.pos() - at.pos();
+        let len = r.pos().wrapping_sub(at.pos());
         at.clone().take(len)?
     } else {
         r.take(n.checked_mul(2)?)?
@@ -155,11 +155,13 @@ fn read_group<'a>(r: &mut Reader<'a>, n: usize) -> Option<GroupHead<'a>> {
         if w > u32::from(MAX_VALUE_BITS) || s > u32::from(MAX_VALUE_SHIFT) {
             return None;
         }
-        row_bits += w;
+        row_bits = row_bits.wrapping_add(w);
     }
-    head.comps = comps_at.clone().take(r.pos() - comps_at.pos())?;
+    head.comps = comps_at
+        .clone()
+        .take(r.pos().wrapping_sub(comps_at.pos()))?;
     head.row_bits = row_bits;
-    let total = u64::from(head.keys) * u64::from(head.time_bits + row_bits);
+    let total = u64::from(head.keys).wrapping_mul(u64::from(head.time_bits.wrapping_add(row_bits)));
     head.bits = r.take(usize::try_from(total.div_ceil(8)).ok()?)?;
     Some(head)
 }
@@ -226,7 +228,7 @@ impl<'a> PcaSplineCodec<'a> {
             if n == 0 {
                 return Err(malformed("empty group"));
             }
-            covered += u64::from(n);
+            covered = covered.wrapping_add(u64::from(n));
             check_indices(&mut r, n, wide, channels)?;
         }
         let groups = bytes.get(groups_at..r.pos()).ok_or(truncated)?;
@@ -237,7 +239,7 @@ impl<'a> PcaSplineCodec<'a> {
             r.zigzag_i32().ok_or(truncated)?;
         }
         let consts = bytes.get(consts_at..r.pos()).ok_or(truncated)?;
-        covered += u64::from(const_count);
+        covered = covered.wrapping_add(u64::from(const_count));
         if covered != channels as u64 {
             return Err(malformed(
                 "groups and constants do not cover every channel once",
@@ -264,14 +266,14 @@ impl<'a> PcaSplineCodec<'a> {
         let mut r = Reader::new(self.groups);
         for g in 0..self.group_count as usize {
             let n = r.varint_u32().unwrap_or(0) as usize;
-            let bytes = r.take(n * self.width()).unwrap_or(&[]);
+            let bytes = r.take(n.wrapping_mul(self.width())).unwrap_or(&[]);
             if g == i {
                 return Indices::new(bytes, self.wide);
             }
         }
         let mut c = Reader::new(self.consts);
         let bytes = c
-            .take(self.const_count as usize * self.width())
+            .take((self.const_count as usize).wrapping_mul(self.width()))
             .unwrap_or(&[]);
         Indices::new(bytes, self.wide)
     }
@@ -322,7 +324,7 @@ impl<'a> PcaSplineCodec<'a> {
         let one = 1i64 << FRAC_BITS;
         let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
         let rel = frame.wrapping_sub(cur.start);
-        cursor.patch = self.patches_at(&cur, cursor.patch, rel, one - frac, out);
+        cursor.patch = self.patches_at(&cur, cursor.patch, rel, one.wrapping_sub(frac), out);
         if frac > 0 {
             let after = frame.saturating_add(1);
             if cursor.next_start == Some(after) {

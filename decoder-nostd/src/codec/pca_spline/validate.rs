@@ -28,9 +28,9 @@ pub(super) fn check_indices(
 impl<'a> PcaSplineCodec<'a> {
     /// Every channel in at most one list (sorted lists, pairwise merge).
     pub(super) fn check_disjoint(&self) -> Result<(), Error> {
-        let lists = self.group_count as usize + 1;
+        let lists = (self.group_count as usize).wrapping_add(1);
         for a in 0..lists {
-            for b in a + 1..lists {
+            for b in a.wrapping_add(1)..lists {
                 let (mut ia, mut ib) = (self.list(a), self.list(b));
                 let (mut x, mut y) = (ia.next(), ib.next());
                 while let (Some(p), Some(q)) = (x, y) {
@@ -57,7 +57,7 @@ impl<'a> PcaSplineCodec<'a> {
             let seg = self
                 .segment_at(at)
                 .ok_or(malformed("segment header truncated"))?;
-            if seg.end < seg.start || seg.end - seg.start >= MAX_SEGMENT_FRAMES {
+            if seg.end < seg.start || seg.end.wrapping_sub(seg.start) >= MAX_SEGMENT_FRAMES {
                 return Err(malformed("segment length out of range"));
             }
             if seg.end >= frames {
@@ -79,13 +79,15 @@ impl<'a> PcaSplineCodec<'a> {
             }
             self.check_body(&seg)?;
             // Patches of a segment lie before the next one starts.
-            let next_start = self.segment_at(seg.next).map_or(seg.end + 1, |n| n.start);
+            let next_start = self
+                .segment_at(seg.next)
+                .map_or(seg.end.wrapping_add(1), |n| n.start);
             self.check_patches(&seg, next_start.saturating_sub(seg.start))?;
             before_prev_end = prev.map(|(_, e)| e);
             prev = Some((seg.start, seg.end));
             at = seg.next;
         }
-        if prev.map(|(_, e)| e) != Some(frames - 1) {
+        if prev.map(|(_, e)| e) != Some(frames.wrapping_sub(1)) {
             return Err(malformed("last segment must end at the last frame"));
         }
         if at != self.segments.len() {
@@ -94,17 +96,17 @@ impl<'a> PcaSplineCodec<'a> {
         Ok(())
     }
     pub(super) fn check_body(&self, seg: &Segment<'a>) -> Result<(), Error> {
-        let len = seg.end - seg.start + 1;
+        let len = seg.end.wrapping_sub(seg.start).wrapping_add(1);
         let mut g = Reader::new(self.groups);
         let mut body = Reader::new(seg.body);
         for _ in 0..self.group_count {
             let n = g.varint_u32().unwrap_or(0) as usize;
-            g.take(n * self.width());
+            g.take(n.wrapping_mul(self.width()));
             let head = read_group(&mut body, n).ok_or(malformed("group data truncated"))?;
             if head.k == 0 {
                 continue;
             }
-            if head.keys < 2 || head.keys > len || (len - 1) >> head.time_bits != 0 {
+            if head.keys < 2 || head.keys > len || len.wrapping_sub(1) >> head.time_bits != 0 {
                 return Err(malformed("key count or time width out of range"));
             }
             let mut bits = BitReader::at(head.bits, 0);
@@ -116,7 +118,7 @@ impl<'a> PcaSplineCodec<'a> {
                 }
                 last = Some(t);
             }
-            if last != Some(len - 1) {
+            if last != Some(len.wrapping_sub(1)) {
                 return Err(malformed("last key must be the segment's last frame"));
             }
         }
