@@ -163,6 +163,13 @@ pub enum Error {
         /// Slots given.
         actual: usize,
     },
+    /// A structure the validation of [`Clip::parse`](crate::Clip::parse)
+    /// proved could not be read while decoding (a decoder bug, never a bad
+    /// clip); the output slice may be partly written.
+    PlayerInvariant {
+        /// The frame being decoded.
+        frame: u32,
+    },
     /// A frame index past the end of the clip.
     PlayerFrameOutOfRange {
         /// The index asked for.
@@ -243,6 +250,10 @@ impl fmt::Display for Error {
             Error::PlayerOutputTooSmall { expected, actual } => {
                 write!(f, "output slice holds {actual} values, {expected} needed")
             }
+            Error::PlayerInvariant { frame } => write!(
+                f,
+                "decoder invariant broken at frame {frame} (a decoder bug: the clip was validated)"
+            ),
             Error::PlayerFrameOutOfRange { frame, frames } => {
                 write!(f, "frame {frame} out of range (clip has {frames})")
             }

@@ -104,26 +104,28 @@ impl<'a, const N: usize> Player<'a, N> {
                 frames: self.frames,
             });
         }
-        if self.pose_at(u64::from(i) << 16, out) {
+        if self.pose_at(u64::from(i) << 16, out)? {
             return Ok(());
         }
-        self.seek(i);
+        self.seek(i)?;
         out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
         Ok(())
     }
 
     /// Codecs that evaluate any time directly (no frame history) decode
     /// the pose at `pos` (frames, 16.16) into `out` and return true.
-    fn pose_at(&mut self, pos: u64, out: &mut [i32]) -> bool {
+    fn pose_at(&mut self, pos: u64, out: &mut [i32]) -> Result<bool, Error> {
         match &self.codec {
             #[cfg(feature = "codec-pca-spline")]
-            Codec::PcaSpline(c) => {
-                c.decode_at(pos, &mut self.segment, out, &mut self.state);
-                true
-            }
+            Codec::PcaSpline(c) => c
+                .decode_at(pos, &mut self.segment, out, &mut self.state)
+                .map(|()| true)
+                .ok_or(Error::PlayerInvariant {
+                    frame: u32::try_from(pos >> 16).unwrap_or(u32::MAX),
+                }),
             _ => {
                 let _ = (pos, out);
-                false
+                Ok(false)
             }
         }
     }
@@ -146,11 +148,11 @@ impl<'a, const N: usize> Player<'a, N> {
         } else {
             (whole << 16) | frac
         };
-        if self.pose_at(pos, out) {
+        if self.pose_at(pos, out)? {
             return Ok(());
         }
         if whole >= u64::from(last) {
-            self.seek(last);
+            self.seek(last)?;
             out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
             return Ok(());
         }
@@ -162,9 +164,9 @@ impl<'a, const N: usize> Player<'a, N> {
             if self.state_frame != Some(i.wrapping_add(1))
                 || c.key_before(i.wrapping_add(1)) == i.wrapping_add(1)
             {
-                self.seek(i);
+                self.seek(i)?;
                 out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
-                self.seek(i.wrapping_add(1));
+                self.seek(i.wrapping_add(1))?;
             } else {
                 let v2 = self.state.get(self.channels..self.channels.wrapping_mul(2));
                 out.copy_from_slice(v2.unwrap_or(&[]));
@@ -175,11 +177,12 @@ impl<'a, const N: usize> Player<'a, N> {
             }
             return Ok(());
         }
-        self.seek(i);
+        self.seek(i)?;
         let now = self.state.get(..self.channels).unwrap_or(&[]);
         out.copy_from_slice(now);
         // Decode frame i + 1 into `out` without disturbing the state.
-        decode(&self.codec, i.wrapping_add(1), out);
+        let next = i.wrapping_add(1);
+        decode(&self.codec, next, out).ok_or(Error::PlayerInvariant { frame: next })?;
         for (o, &a) in out.iter_mut().zip(now) {
             *o = mix(a, *o, frac);
         }
@@ -196,9 +199,9 @@ impl<'a, const N: usize> Player<'a, N> {
     }
 
     /// Brings `state` to frame `i`, decoding as few frames as possible.
-    fn seek(&mut self, i: u32) {
+    fn seek(&mut self, i: u32) -> Result<(), Error> {
         if self.state_frame == Some(i) {
-            return;
+            return Ok(());
         }
         let key = self.key_before(i);
         let start = match self.state_frame {
@@ -212,9 +215,14 @@ impl<'a, const N: usize> Player<'a, N> {
             _ => self.state.get_mut(..self.channels).unwrap_or(&mut []),
         };
         for f in start..=i {
-            decode(&codec, f, state);
+            if decode(&codec, f, state).is_none() {
+                // The state holds no whole frame now.
+                self.state_frame = None;
+                return Err(Error::PlayerInvariant { frame: f });
+            }
         }
         self.state_frame = Some(i);
+        Ok(())
     }
 
     fn key_before(&self, i: u32) -> u32 {
@@ -235,8 +243,8 @@ fn mix(a: i32, b: i32, frac: u64) -> i32 {
 }
 
 /// Decodes frame `f` into `values`, which hold frame `f - 1` if `f` is not
-/// a key frame.
-fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
+/// a key frame. `None` only if an invariant of the validated clip is broken.
+fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) -> Option<()> {
     match codec {
         #[cfg(feature = "codec-index")]
         Codec::Index(c) => c.decode_frame(f, values),
@@ -244,6 +252,7 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
         Codec::Predictive(c) => c.decode_frame(f, values),
         _ => {
             let _ = (f, values);
+            Some(())
         }
     }
 }

@@ -114,8 +114,9 @@ impl<'a> IndexCodec<'a> {
     }
 
     /// Decodes frame `frame` into `state`, which must hold frame `frame - 1`
-    /// when `frame` is a delta frame (§4.3).
-    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) {
+    /// when `frame` is a delta frame (§4.3). `None` (with `state` partly
+    /// written) only if an invariant of the validated section is broken.
+    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
         let set = if self.is_key(frame) {
             // A key frame defines every channel from scratch (§4.3).
             state.fill(0);
@@ -128,12 +129,10 @@ impl<'a> IndexCodec<'a> {
         let groups = r.u16_le().unwrap_or(0);
         for _ in 0..groups {
             let Some(&[width, shift_flags, c0, c1]) = r.take(GROUP_HEADER_LEN) else {
-                return;
+                return None;
             };
             let count = usize::from(u16::from_le_bytes([c0, c1]));
-            let Some(entries) = r.take(count.saturating_mul(ENTRY_LEN)) else {
-                return;
-            };
+            let entries = r.take(count.saturating_mul(ENTRY_LEN))?;
             let width = u32::from(width);
             let shift = u32::from(shift_flags & SHIFT_MASK);
             // Two copies of the loop so the accumulate test is per group,
@@ -144,6 +143,7 @@ impl<'a> IndexCodec<'a> {
                 decode_group::<false>(entries, self.table, &mut bits, width, shift, state);
             }
         }
+        Some(())
     }
 }
 

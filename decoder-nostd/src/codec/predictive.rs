@@ -117,21 +117,14 @@ impl<'a> PredictiveCodec<'a> {
 
     /// Decodes frame `frame` into `state` (at least [`Self::state_words`]
     /// words), which must hold frame `frame − 1` unless `frame` starts a
-    /// block. The frame's values are `state[..C]`.
-    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) {
+    /// block. The frame's values are `state[..C]`. `None` only if the state
+    /// is smaller than [`Self::state_words`] (`Player::new` refuses that).
+    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
         let c = self.channels;
-        let Some((v1, rest)) = state.split_at_mut_checked(c) else {
-            return;
-        };
-        let Some((v2, rest)) = rest.split_at_mut_checked(c) else {
-            return;
-        };
-        let Some((ctx, rest)) = rest.split_at_mut_checked(c) else {
-            return;
-        };
-        let Some((probs, coder)) = rest.split_at_mut_checked(PROB_WORDS) else {
-            return;
-        };
+        let (v1, rest) = state.split_at_mut_checked(c)?;
+        let (v2, rest) = rest.split_at_mut_checked(c)?;
+        let (ctx, rest) = rest.split_at_mut_checked(c)?;
+        let (probs, coder) = rest.split_at_mut_checked(PROB_WORDS)?;
         let j = frame.checked_rem(self.block_frames).unwrap_or(0);
         let mut rc = if j == 0 {
             probs.fill(i32::from(PROB_INIT).wrapping_mul(0x1_0001));
@@ -159,6 +152,7 @@ impl<'a> PredictiveCodec<'a> {
             *cx = q.unsigned_abs().min(2) as i32;
         }
         rc.store(coder);
+        Some(())
     }
 }
 

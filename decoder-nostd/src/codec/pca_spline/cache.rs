@@ -226,8 +226,15 @@ impl<'a> PcaSplineCodec<'a> {
     /// ([`INTERVAL`] words: `[from, to)` of `rel` in 16.16, `to` being
     /// `u32::MAX` for the last interval, the span in frames, the tangent
     /// ratios) and its `4k` control points. Groups without a slot are
-    /// decoded from the record on every pose.
-    pub(super) fn eval(&self, seg: &Segment<'a>, pos: u64, out: &mut [i32], cache: &mut [i32]) {
+    /// decoded from the record on every pose. `None` (with `out` partly
+    /// written) only if an invariant of the validated section is broken.
+    pub(super) fn eval(
+        &self,
+        seg: &Segment<'a>,
+        pos: u64,
+        out: &mut [i32],
+        cache: &mut [i32],
+    ) -> Option<()> {
         let rel = relative(seg, pos);
         let (head, mut slots) = cache
             .split_at_mut_checked(CACHE_HEAD)
@@ -248,33 +255,24 @@ impl<'a> PcaSplineCodec<'a> {
             out,
         };
         for _ in 0..cached {
-            let Some(&[_, dst, nkm]) = slots.first_chunk::<GROUP_HEAD>() else {
-                return;
-            };
+            let &[_, dst, nkm] = slots.first_chunk::<GROUP_HEAD>()?;
             let (n, k, _) = unpack(nkm);
             if k == 0 {
-                let Some(target) = self.target(dst, n, pose.out) else {
-                    return;
-                };
-                let Some((values, tail)) = core::mem::take(&mut slots)
+                let target = self.target(dst, n, pose.out)?;
+                let (values, tail) = core::mem::take(&mut slots)
                     .get_mut(GROUP_HEAD..)
-                    .and_then(|t| t.split_at_mut_checked(n))
-                else {
-                    return;
-                };
+                    .and_then(|t| t.split_at_mut_checked(n))?;
                 slots = tail;
                 target.copy(values);
                 continue;
             }
             let size = (GROUP_HEAD + INTERVAL).wrapping_add(k.wrapping_mul(4));
-            let Some((slot, tail)) = core::mem::take(&mut slots).split_at_mut_checked(size) else {
-                return;
-            };
+            let (slot, tail) = core::mem::take(&mut slots).split_at_mut_checked(size)?;
             self.slot_group(nkm, slot, &mut pose);
             slots = tail;
         }
         if cached == self.group_count {
-            return;
+            return Some(());
         }
         // Groups without a cache slot: parse the record on every pose.
         let mut g = Reader::new(self.groups);
@@ -291,13 +289,9 @@ impl<'a> PcaSplineCodec<'a> {
             let idx_at = g.pos();
             let idx = g.take(n.wrapping_mul(self.width())).unwrap_or(&[]);
             let rec = body.pos();
-            let Some(group) = read_group(&mut body, n) else {
-                return;
-            };
+            let group = read_group(&mut body, n)?;
             if group.k == 0 {
-                let Some(target) = Dst::of(idx, self.wide, pose.out) else {
-                    return;
-                };
+                let target = Dst::of(idx, self.wide, pose.out)?;
                 let mut values = GroupValues::new(&group, &[]);
                 target.fill(|| values.next().unwrap_or(0));
                 continue;
@@ -316,7 +310,9 @@ impl<'a> PcaSplineCodec<'a> {
             }
             self.slot_group(hd[2], &mut slot, &mut pose);
         }
+        Some(())
     }
+
     /// Where a group's values go, as a slot stores it: the first channel of
     /// a run of consecutive channels, or `−1 −` the offset `idx_at` of its
     /// index list `idx` in the group table.
@@ -332,6 +328,7 @@ impl<'a> PcaSplineCodec<'a> {
             (-1i32).wrapping_sub(idx_at as i32)
         }
     }
+
     /// Evaluates a `k > 0` group from its slot (head, key interval, control
     /// points), through the function specialised for its `k` (or for a
     /// single curve), as its head word `nkm` says. The caller hands it
@@ -352,6 +349,7 @@ impl<'a> PcaSplineCodec<'a> {
             _ => self.cached_group_any(slot, pose),
         }
     }
+
     /// Evaluates a cached group of `K` components whose slot, after its head
     /// `hd`, is `slot` (key interval, control points); refills the slot when
     /// `rel` left its interval.
@@ -361,6 +359,7 @@ impl<'a> PcaSplineCodec<'a> {
         // returning nothing keeps a register free in the channel loops).
         let _ = self.group_k::<K>(slot, pose);
     }
+
     #[inline(always)]
     pub(super) fn group_k<const K: usize>(
         &self,
@@ -385,10 +384,12 @@ impl<'a> PcaSplineCodec<'a> {
             .write_k::<K>(a, means, basis, ms);
         Some(())
     }
+
     /// [`Self::cached_group`] for any `k`.
     pub(super) fn cached_group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) {
         let _ = self.group_any(slot, pose);
     }
+
     pub(super) fn group_any(&self, slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
         let (body, rel) = (pose.body, pose.rel);
@@ -408,6 +409,7 @@ impl<'a> PcaSplineCodec<'a> {
             .write(k, w, controls, means, basis, ms);
         Some(())
     }
+
     /// A cached group of one channel (a run at `hd[1]`) and one component — a
     /// single curve (root translations, heading): [`Self::cached_group`]
     /// without a channel loop and with the record's five leading bytes (k, ms,
@@ -416,6 +418,7 @@ impl<'a> PcaSplineCodec<'a> {
     pub(super) fn curve(slot: &mut [i32], pose: &mut Pose<'a, '_>) {
         let _ = Self::curve_at(slot, pose);
     }
+
     #[inline(always)]
     pub(super) fn curve_at(slot: &mut [i32], pose: &mut Pose<'a, '_>) -> Option<()> {
         let (&mut [rec, dst, nkm], slot) = slot.split_first_chunk_mut::<GROUP_HEAD>()?;
@@ -437,6 +440,7 @@ impl<'a> PcaSplineCodec<'a> {
         *pose.out.get_mut(dst as usize)? = mean.wrapping_shl(ms).wrapping_add(acc >> BASIS_SHIFT);
         Some(())
     }
+
     /// Where the values of a cached group go (its slot's `dst` word).
     pub(super) fn target<'o>(&self, dst: i32, n: usize, out: &'o mut [i32]) -> Option<Dst<'a, 'o>> {
         if let Ok(first) = usize::try_from(dst) {
@@ -452,6 +456,7 @@ impl<'a> PcaSplineCodec<'a> {
             Dst::Narrow(idx, out)
         })
     }
+
     /// Fills the cache head and as many group slots as fit for `seg`, each
     /// group's key interval the one holding `rel`.
     pub(super) fn prepare(

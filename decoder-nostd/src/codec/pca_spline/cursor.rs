@@ -49,6 +49,7 @@ impl<'a> PcaSplineCodec<'a> {
         let v = r.zigzag_i32()?;
         Some((delta, c, v))
     }
+
     /// The segment whose header starts at byte `at`.
     pub(super) fn segment_at(&self, at: usize) -> Option<Segment<'a>> {
         let mut r = Reader::new(self.segments.get(at..)?);
@@ -64,6 +65,7 @@ impl<'a> PcaSplineCodec<'a> {
             next: at.wrapping_add(r.pos()),
         })
     }
+
     /// The segment holding `frame` (the last one starting at or before it).
     /// Inside the cursor's segment this reads nothing; otherwise it walks
     /// the list from the cursor (or from the start when going back) and
@@ -101,6 +103,7 @@ impl<'a> PcaSplineCodec<'a> {
             }
         }
     }
+
     /// Adds the patches of `seg` at relative frame `frame` times `weight`
     /// (16.16) to `out` (§5.5), scanning from `from` unless that is past
     /// `frame` (then from the first patch); nothing is read when `frame`

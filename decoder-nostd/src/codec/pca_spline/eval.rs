@@ -261,12 +261,14 @@ impl<'a> PcaSplineCodec<'a> {
             }
         }
     }
+
     /// The constant channels' values in order.
     pub(super) fn const_values(&self) -> impl Iterator<Item = i32> + 'a {
         let mut r = Reader::new(self.consts);
         r.take((self.const_count as usize).wrapping_mul(self.width()));
         (0..self.const_count).map(move |_| r.zigzag_i32().unwrap_or(0))
     }
+
     /// Blends the other segment of a window into `out`, which holds the
     /// values of `cur` (§5.4 step 4): `a + (b − a)·w` with `a` the earlier
     /// segment's value. `cur_first` says whether `cur` is `earlier`.
@@ -333,6 +335,7 @@ impl GroupHead<'_> {
         ];
         (lo, rows.map(time))
     }
+
     /// Calls `each` with the four control values of every component at the
     /// keys `i − 1 … i + 2` (ends repeated). The four key rows are read in
     /// lockstep, one component at a time.
@@ -359,6 +362,7 @@ impl GroupHead<'_> {
             }));
         }
     }
+
     /// Key time `i`.
     pub(super) fn time(&self, i: u32) -> u32 {
         bits_at64(
@@ -367,12 +371,14 @@ impl GroupHead<'_> {
             self.time_bits,
         )
     }
+
     /// The bit position of key row `row`.
     pub(super) fn key_row(&self, row: u32) -> u64 {
         u64::from(self.keys)
             .wrapping_mul(u64::from(self.time_bits))
             .wrapping_add(u64::from(row).wrapping_mul(u64::from(self.row_bits)))
     }
+
     /// Calls `each` with the control value of every component in the key
     /// row at bit `at`.
     pub(super) fn row_values(&self, at: u64, mut each: impl FnMut(i32)) {
@@ -387,6 +393,7 @@ impl GroupHead<'_> {
             each(off.wrapping_add(v.wrapping_shl(u32::from(sh))));
         }
     }
+
     /// The spline's value of every component at `rel` (§5.4).
     pub(super) fn coefficients(&self, rel: u64, coef: &mut [i32; K_MAX]) {
         if self.k == 0 {

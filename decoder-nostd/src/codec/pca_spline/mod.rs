@@ -260,6 +260,7 @@ impl<'a> PcaSplineCodec<'a> {
         codec.check_segments(segment_count, frames)?;
         Ok(codec)
     }
+
     /// Channel list `i` (groups first, then the constants) as an index
     /// iterator.
     fn list(&self, i: usize) -> Indices<'a> {
@@ -277,6 +278,7 @@ impl<'a> PcaSplineCodec<'a> {
             .unwrap_or(&[]);
         Indices::new(bytes, self.wide)
     }
+
     fn width(&self) -> usize {
         if self.wide {
             2
@@ -284,24 +286,24 @@ impl<'a> PcaSplineCodec<'a> {
             1
         }
     }
+
     /// Decodes the pose at `pos` (frames, 16.16; at most the last frame)
     /// into `out`. `cursor` remembers the segment and the patch scan for the
     /// next call; `cache` (any length, its content is the decoder's own)
     /// keeps each group's record offset and current key interval (control
     /// points, tangent ratios) so that a pose inside an interval reads no
     /// bits and parses no varint (§6: the output never depends on it).
+    /// `None` only if an invariant of the validated section is broken.
     pub(crate) fn decode_at(
         &self,
         pos: u64,
         cursor: &mut Cursor<'a>,
         out: &mut [i32],
         cache: &mut [i32],
-    ) {
+    ) -> Option<()> {
         let frame = u32::try_from(pos >> FRAC_BITS).unwrap_or(u32::MAX);
-        let Some(cur) = self.locate(frame, cursor) else {
-            return;
-        };
-        self.eval(&cur, pos, out, cache);
+        let cur = self.locate(frame, cursor)?;
+        self.eval(&cur, pos, out, cache)?;
         // A blend window (§5.2) around the start of `cur` or of the next
         // segment: blend the other segment's values into `out`.
         if cursor
@@ -335,5 +337,6 @@ impl<'a> PcaSplineCodec<'a> {
                 cursor.patch = self.patches_at(&cur, cursor.patch, rel.wrapping_add(1), frac, out);
             }
         }
+        Some(())
     }
 }

@@ -46,6 +46,7 @@ impl<'a> PcaSplineCodec<'a> {
         }
         Ok(())
     }
+
     pub(super) fn check_segments(&self, count: u32, frames: u32) -> Result<(), Error> {
         if count == 0 {
             return Err(malformed("no segments"));
@@ -95,6 +96,7 @@ impl<'a> PcaSplineCodec<'a> {
         }
         Ok(())
     }
+
     pub(super) fn check_body(&self, seg: &Segment<'a>) -> Result<(), Error> {
         let len = seg.end.wrapping_sub(seg.start).wrapping_add(1);
         let mut g = Reader::new(self.groups);
@@ -127,6 +129,7 @@ impl<'a> PcaSplineCodec<'a> {
         }
         Ok(())
     }
+
     pub(super) fn check_patches(&self, seg: &Segment<'a>, primary: u32) -> Result<(), Error> {
         let bad = malformed("patches out of order or out of range");
         let mut r = Reader::new(seg.patches);
