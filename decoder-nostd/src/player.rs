@@ -138,10 +138,9 @@ impl<'a, const N: usize> Player<'a, N> {
         let out = self.output(out)?;
         let ns = t_us.saturating_mul(1000);
         let period = u64::from(self.frame_time_ns);
-        let whole = ns.checked_div(period).unwrap_or(0);
-        let frac = (ns.checked_rem(period).unwrap_or(0) << 16)
-            .checked_div(period)
-            .unwrap_or(0);
+        // period > 0: frame_time_ns is validated non-zero (§3.2).
+        #[allow(clippy::arithmetic_side_effects)]
+        let (whole, frac) = (ns / period, ((ns % period) << 16) / period);
         let last = self.frames.wrapping_sub(1);
         let pos = if whole >= u64::from(last) {
             u64::from(last) << 16
@@ -214,12 +213,15 @@ impl<'a, const N: usize> Player<'a, N> {
             Codec::Predictive(_) => &mut self.state[..],
             _ => self.state.get_mut(..self.channels).unwrap_or(&mut []),
         };
+        // No early exit: the loop stays as tight as before the check.
+        let mut ok = true;
         for f in start..=i {
-            if decode(&codec, f, state).is_none() {
-                // The state holds no whole frame now.
-                self.state_frame = None;
-                return Err(Error::PlayerInvariant { frame: f });
-            }
+            ok &= decode(&codec, f, state).is_some();
+        }
+        if !ok {
+            // The state holds no whole frame now.
+            self.state_frame = None;
+            return Err(Error::PlayerInvariant { frame: i });
         }
         self.state_frame = Some(i);
         Ok(())

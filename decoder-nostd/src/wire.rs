@@ -49,7 +49,9 @@ pub fn varint_u32(bytes: &[u8], at: usize) -> Option<(u32, usize)> {
     varint_long(bytes, at)
 }
 
-/// [`varint_u32`] of any length.
+/// [`varint_u32`] of any length, out of line: the one-byte fast path stays
+/// small where it is inlined.
+#[inline(never)]
 fn varint_long(bytes: &[u8], at: usize) -> Option<(u32, usize)> {
     let mut value: u32 = 0;
     for (i, &b) in (0u32..).zip(bytes.get(at..)?.iter().take(VARINT_MAX_LEN)) {

@@ -95,9 +95,12 @@ impl<'a> IndexCodec<'a> {
 
     /// The key frame at or before `frame`.
     pub(crate) fn key_before(&self, frame: u32) -> u32 {
-        match frame.checked_rem(self.key_interval) {
-            Some(r) => frame.wrapping_sub(r),
-            None => frame, // no key interval: every frame is a key frame
+        if self.key_interval == 0 {
+            frame
+        } else {
+            #[allow(clippy::arithmetic_side_effects)] // key_interval > 0 here
+            let r = frame % self.key_interval;
+            frame.wrapping_sub(r)
         }
     }
 

@@ -101,7 +101,10 @@ impl<'a> PredictiveCodec<'a> {
 
     /// The first frame of the block holding `frame`.
     pub(crate) fn key_before(&self, frame: u32) -> u32 {
-        frame.wrapping_sub(frame.checked_rem(self.block_frames).unwrap_or(0))
+        // block_frames > 0 (validated).
+        #[allow(clippy::arithmetic_side_effects)]
+        let r = frame % self.block_frames;
+        frame.wrapping_sub(r)
     }
 
     /// Byte range of block `b` in `data`.
@@ -125,11 +128,13 @@ impl<'a> PredictiveCodec<'a> {
         let (v2, rest) = rest.split_at_mut_checked(c)?;
         let (ctx, rest) = rest.split_at_mut_checked(c)?;
         let (probs, coder) = rest.split_at_mut_checked(PROB_WORDS)?;
-        let j = frame.checked_rem(self.block_frames).unwrap_or(0);
+        #[allow(clippy::arithmetic_side_effects)] // block_frames > 0 (validated)
+        let j = frame % self.block_frames;
         let mut rc = if j == 0 {
             probs.fill(i32::from(PROB_INIT).wrapping_mul(0x1_0001));
             ctx.fill(0);
-            let (start, end) = self.block(frame.checked_div(self.block_frames).unwrap_or(0));
+            #[allow(clippy::arithmetic_side_effects)] // block_frames > 0
+            let (start, end) = self.block(frame / self.block_frames);
             RangeDecoder::start(self.data, start, end)
         } else {
             RangeDecoder::load(self.data, coder)

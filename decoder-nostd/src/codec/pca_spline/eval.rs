@@ -18,7 +18,9 @@ impl<'i, 'o> Dst<'i, 'o> {
     /// The destination of the channels listed in `idx`.
     pub(super) fn of(idx: &'i [u8], wide: bool, out: &'o mut [i32]) -> Option<Self> {
         let width = if wide { 2 } else { 1 };
-        let n = if wide { idx.len() >> 1 } else { idx.len() };
+        // width is 1 or 2.
+        #[allow(clippy::arithmetic_side_effects)]
+        let n = idx.len() / width;
         let first = idx.get(..width).map_or(usize::MAX, index_of);
         let last = idx.get(idx.len().wrapping_sub(width)..).map_or(0, index_of);
         // Indices strictly increase (checked by `parse`): n of them
@@ -284,8 +286,8 @@ impl<'a> PcaSplineCodec<'a> {
         // E = earlier.end.
         let from = u64::from(later.start.saturating_sub(1)) << FRAC_BITS;
         let steps = u64::from(earlier.end.saturating_add(2).saturating_sub(later.start)).max(1);
-        let w =
-            (pos.saturating_sub(from).checked_div(steps).unwrap_or(0)).min(1 << FRAC_BITS) as i64;
+        #[allow(clippy::arithmetic_side_effects)] // steps ≥ 1
+        let w = (pos.saturating_sub(from) / steps).min(1 << FRAC_BITS) as i64;
         let other = if cur_first { later } else { earlier };
         let rel = u64::from(relative(other, pos));
         let mut g = Reader::new(self.groups);
