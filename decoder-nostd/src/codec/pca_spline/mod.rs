@@ -200,10 +200,11 @@ impl Iterator for Indices<'_> {
 /// `p` of `comps`: width, shift, offset and the byte after it.
 #[inline(always)]
 fn comp_at(comps: &[u8], p: usize) -> Option<(u32, u32, i32, usize)> {
-    let &[wd, sh] = comps.get(p..p.wrapping_add(2))? else {
+    let [wd, sh, ref offset @ ..] = *comps.get(p..)? else {
         return None;
     };
-    let (u, next) = wire::varint_u32(comps, p.wrapping_add(2))?;
+    let (u, len) = wire::varint_u32_unrolled(offset, 0)?;
+    let next = p.wrapping_add(2).wrapping_add(len);
     Some((wd.into(), sh.into(), wire::zigzag_decode(u), next))
 }
 
