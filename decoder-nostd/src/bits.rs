@@ -1,7 +1,8 @@
-//! LSB-first bit reader over a byte slice (SPEC.md §4.4). Bits past the end
-//! of the slice read as zero, so a read can never go out of bounds; the
-//! codecs check payload lengths up front so that never happens on a
-//! validated clip.
+//! LSB-first bit reading over a byte slice (SPEC.md §4.4): the sequential
+//! [`BitReader`] and the random-access [`bits_at`] (the `pca-spline` key
+//! rows). Bits past the end of the slice read as zero, so a read can never
+//! go out of bounds; the codecs check payload lengths up front so that
+//! never happens on a validated clip.
 
 #[derive(Clone, Debug)]
 pub(crate) struct BitReader<'a> {
@@ -40,13 +41,60 @@ impl<'a> BitReader<'a> {
             };
             self.acc |= half << self.avail;
             self.next_byte = at.wrapping_add(2);
-            self.avail += 16;
+            self.avail = self.avail.wrapping_add(16);
         }
-        let v = self.acc & ((1u32 << n) - 1);
+        let v = self.acc & (1u32 << n).wrapping_sub(1);
         self.acc >>= n;
-        self.avail -= n;
+        self.avail = self.avail.wrapping_sub(n);
         v
     }
+}
+
+/// `n ≤ 30` bits of `bytes` from bit `bit`, LSB-first (§4.4); bits past
+/// the end read as zero, like [`BitReader`].
+#[inline(always)]
+#[cfg(feature = "codec-pca-spline")]
+pub(crate) fn bits_at(bytes: &[u8], bit: usize, n: u32) -> u32 {
+    let at = bit >> 3;
+    if n <= 25 {
+        // 25 bits past a shift of at most 7 fit in one 32-bit window.
+        if let Some(&[a, b, c, d]) = bytes.get(at..at.wrapping_add(4)) {
+            let word = u32::from_le_bytes([a, b, c, d]);
+            return (word >> (bit & 7)) & 1u32.wrapping_shl(n).wrapping_sub(1);
+        }
+    }
+    let word = match bytes.get(at..at.wrapping_add(8)) {
+        Some(&[a, b, c, d, e, f, g, h]) => u64::from_le_bytes([a, b, c, d, e, f, g, h]),
+        _ => tail_word(bytes, at),
+    };
+    ((word >> (bit & 7)) as u32) & 1u32.wrapping_shl(n).wrapping_sub(1)
+}
+
+/// [`bits_at`] at a 64-bit bit position.
+#[inline(always)]
+#[cfg(feature = "codec-pca-spline")]
+pub(crate) fn bits_at64(bytes: &[u8], bit: u64, n: u32) -> u32 {
+    match usize::try_from(bit) {
+        Ok(bit) if bit < usize::MAX - 64 => bits_at(bytes, bit, n),
+        _ => 0,
+    }
+}
+
+/// The eight bytes of `bytes` from `at` as a little-endian word, zeros past
+/// the end.
+#[inline(never)]
+#[cfg(feature = "codec-pca-spline")]
+fn tail_word(bytes: &[u8], at: usize) -> u64 {
+    let mut word = 0u64;
+    for i in 0..8 {
+        let b = at
+            .checked_add(i)
+            .and_then(|j| bytes.get(j))
+            .copied()
+            .unwrap_or(0);
+        word |= u64::from(b) << i.wrapping_mul(8);
+    }
+    word
 }
 
 #[cfg(test)]

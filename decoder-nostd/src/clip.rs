@@ -1,20 +1,12 @@
 //! The container (SPEC.md §2): magic, version, section table, CRC-32.
 
+use crate::codec::{open_codec, Codec};
 use crate::consts::{self, CRC_LEN, MAX_SECTIONS, PREAMBLE_LEN, SECTION_ENTRY_LEN};
 use crate::error::Error;
 use crate::header::Header;
 use crate::reader::Reader;
 use crate::rig::Rig;
-
-/// CRC-32/ISO-HDLC (the zlib/PNG CRC), SPEC.md §2.3. With the `crc-table`
-/// feature a 1 KB table in flash makes it about six times faster; without
-/// it the bitwise form costs no table.
-#[cfg(feature = "crc-table")]
-pub(crate) const CRC32: crc::Crc<u32, crc::Table<1>> =
-    crc::Crc::<u32, crc::Table<1>>::new(&crc::CRC_32_ISO_HDLC);
-#[cfg(not(feature = "crc-table"))]
-pub(crate) const CRC32: crc::Crc<u32, crc::NoTable> =
-    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+use crate::wire;
 
 /// One section of a clip: its id and its bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,7 +32,7 @@ impl<'a> Iterator for Sections<'a> {
         if self.left == 0 {
             return None;
         }
-        self.left -= 1;
+        self.left = self.left.wrapping_sub(1);
         let (id, range) = read_entry(&mut self.table)?;
         Some(Section {
             id,
@@ -68,12 +60,8 @@ pub struct Clip<'a> {
     header: Header<'a>,
     codec_id: u8,
     rig: Option<Rig<'a>>,
-    // Read only by codecs, all of which may be compiled out.
-    #[cfg_attr(
-        not(any(feature = "codec-index", feature = "codec-pca-spline")),
-        allow(dead_code)
-    )]
-    codec: &'a [u8],
+    /// The codec section, validated once here for every player.
+    codec: Codec<'a>,
 }
 
 impl<'a> Clip<'a> {
@@ -101,18 +89,18 @@ impl<'a> Clip<'a> {
         if count == 0 || usize::from(count) > MAX_SECTIONS {
             return Err(Error::ContainerSectionCount { count });
         }
-        let body_start = PREAMBLE_LEN + usize::from(count) * SECTION_ENTRY_LEN;
-        let needed = body_start + CRC_LEN;
+        let body_start = PREAMBLE_LEN.wrapping_add(usize::from(count) * SECTION_ENTRY_LEN);
+        let needed = body_start.wrapping_add(CRC_LEN);
         if bytes.len() < needed {
             return Err(truncated(needed));
         }
-        let crc_at = bytes.len() - CRC_LEN;
+        let crc_at = bytes.len().wrapping_sub(CRC_LEN);
         let (body, crc_bytes) = bytes.split_at(crc_at);
         let stored = match crc_bytes {
             [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
             _ => return Err(truncated(needed)),
         };
-        let computed = CRC32.checksum(body);
+        let computed = wire::crc32(body);
         if stored != computed {
             return Err(Error::ContainerCrcMismatch { stored, computed });
         }
@@ -162,7 +150,7 @@ impl<'a> Clip<'a> {
             id: consts::SECTION_HEADER,
         })?;
         let header = Header::parse(header, header_id == consts::SECTION_HEADER_COMPACT)?;
-        let (codec_id, codec) = codec.ok_or(Error::ContainerNoCodec)?;
+        let (codec_id, codec_bytes) = codec.ok_or(Error::ContainerNoCodec)?;
         // The servo form of the header describes nothing but a servo count:
         // only a rig table (which lists every servo) gives it meaning.
         if header.is_servo_form() && rig.is_none() {
@@ -173,18 +161,22 @@ impl<'a> Clip<'a> {
         let rig = rig
             .map(|r| Rig::parse(r, header.channel_count()))
             .transpose()?;
-        let clip = Clip {
+        // Validate the codec section now so that playing never meets a
+        // structural error later.
+        let codec = open_codec(
+            codec_id,
+            codec_bytes,
+            header.channel_count(),
+            header.frame_count(),
+        )?;
+        Ok(Clip {
             bytes,
             section_count: count,
             header,
             codec_id,
             rig,
             codec,
-        };
-        // Validate the codec section now so that playing never meets a
-        // structural error later.
-        crate::player::validate_codec(&clip)?;
-        Ok(clip)
+        })
     }
 
     /// The header: timing, skeleton, channel table.
@@ -208,12 +200,8 @@ impl<'a> Clip<'a> {
         self.codec_id
     }
 
-    /// The codec section's bytes.
-    #[cfg_attr(
-        not(any(feature = "codec-index", feature = "codec-pca-spline")),
-        allow(dead_code)
-    )]
-    pub(crate) fn codec_bytes(&self) -> &'a [u8] {
+    /// The validated codec section.
+    pub(crate) fn codec(&self) -> Codec<'a> {
         self.codec
     }
 
@@ -223,6 +211,58 @@ impl<'a> Clip<'a> {
             file: self.bytes,
             table: Reader::new(self.bytes.get(PREAMBLE_LEN..).unwrap_or(&[])),
             left: self.section_count,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec::Vec;
+
+    /// A container of `sections` (SPEC.md §2) with its CRC.
+    fn container(sections: &[(u8, &[u8])]) -> Vec<u8> {
+        let mut b = Vec::from(consts::MAGIC);
+        b.extend([consts::VERSION, 0]);
+        b.extend((sections.len() as u16).to_le_bytes());
+        let mut at = PREAMBLE_LEN + sections.len() * SECTION_ENTRY_LEN;
+        for (id, bytes) in sections {
+            b.extend([*id, 0, 0, 0]);
+            b.extend((at as u32).to_le_bytes());
+            b.extend((bytes.len() as u32).to_le_bytes());
+            at += bytes.len();
+        }
+        for (_, bytes) in sections {
+            b.extend_from_slice(bytes);
+        }
+        let crc = wire::crc32(&b);
+        b.extend(crc.to_le_bytes());
+        b
+    }
+
+    /// Compact header: 1 ns, 1 frame, 1 nm, no joints (so no channels).
+    const HEADER: &[u8] = &[1, 1, 1, 0];
+    /// An `index` section for no channels: no key interval, no groups, no
+    /// table, no payload.
+    const INDEX: &[u8] = &[0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+
+    #[test]
+    fn a_second_codec_section_is_a_duplicate() {
+        let one = container(&[(consts::SECTION_HEADER_COMPACT, HEADER), (0x10, INDEX)]);
+        #[cfg(feature = "codec-index")]
+        assert!(Clip::parse(&one).is_ok());
+        let _ = one;
+        // The same codec twice, or another codec beside it.
+        for id in [0x10, 0x11, 0x12] {
+            let two = container(&[
+                (consts::SECTION_HEADER_COMPACT, HEADER),
+                (0x10, INDEX),
+                (id, INDEX),
+            ]);
+            assert_eq!(
+                Clip::parse(&two).err(),
+                Some(Error::ContainerDuplicateSection { id })
+            );
         }
     }
 }

@@ -71,8 +71,15 @@ pub enum Error {
         /// Byte offset inside the header section.
         offset: usize,
     },
-    /// The frame time is zero or the clip has no frames (§3.1).
+    /// The frame time is zero or the clip has no frames (§3.2).
     HeaderTiming,
+    /// `source_unit_nm` is zero (§3.2).
+    HeaderSourceUnit,
+    /// An End Site joint declares channels (§3.2, §3.4).
+    HeaderEndSiteChannels {
+        /// The joint index.
+        joint: u32,
+    },
     /// A joint's parent is not an earlier joint (§3.2).
     HeaderParent {
         /// The joint index.
@@ -156,6 +163,13 @@ pub enum Error {
         /// Slots given.
         actual: usize,
     },
+    /// A structure the validation of [`Clip::parse`](crate::Clip::parse)
+    /// proved could not be read while decoding (a decoder bug, never a bad
+    /// clip); the output slice may be partly written.
+    PlayerInvariant {
+        /// The frame being decoded.
+        frame: u32,
+    },
     /// A frame index past the end of the clip.
     PlayerFrameOutOfRange {
         /// The index asked for.
@@ -198,6 +212,10 @@ impl fmt::Display for Error {
             Error::HeaderMalformed { offset } => write!(f, "malformed header at byte {offset}"),
             Error::HeaderUtf8 { offset } => write!(f, "header name at byte {offset} is not UTF-8"),
             Error::HeaderTiming => f.write_str("frame time is zero or the clip has no frames"),
+            Error::HeaderSourceUnit => f.write_str("source unit is 0 nm"),
+            Error::HeaderEndSiteChannels { joint } => {
+                write!(f, "End Site joint {joint} has channels")
+            }
             Error::HeaderParent { joint } => write!(f, "joint {joint} has an invalid parent"),
             Error::HeaderChannelKind { code } => write!(f, "unknown channel kind {code}"),
             Error::HeaderUnit { code } => write!(f, "unknown channel unit {code}"),
@@ -232,6 +250,10 @@ impl fmt::Display for Error {
             Error::PlayerOutputTooSmall { expected, actual } => {
                 write!(f, "output slice holds {actual} values, {expected} needed")
             }
+            Error::PlayerInvariant { frame } => write!(
+                f,
+                "decoder invariant broken at frame {frame} (a decoder bug: the clip was validated)"
+            ),
             Error::PlayerFrameOutOfRange { frame, frames } => {
                 write!(f, "frame {frame} out of range (clip has {frames})")
             }
@@ -239,5 +261,5 @@ impl fmt::Display for Error {
     }
 }
 
-#[cfg(feature = "std")]
-impl std::error::Error for Error {}
+/// `core::error::Error`, so no `std` is needed for `?` into a boxed error.
+impl core::error::Error for Error {}

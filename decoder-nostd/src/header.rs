@@ -220,7 +220,7 @@ impl<'a> Header<'a> {
             return Err(Error::HeaderTiming);
         }
         if source_unit_nm == 0 {
-            return Err(malformed(&r));
+            return Err(Error::HeaderSourceUnit);
         }
         let joint_count = r.varint_u32().ok_or_else(|| malformed(&r))?;
         let joints_at = r.pos();
@@ -233,7 +233,7 @@ impl<'a> Header<'a> {
                 }
             }
             if joint.end_site && !joint.kinds.is_empty() {
-                return Err(malformed(&r));
+                return Err(Error::HeaderEndSiteChannels { joint: index });
             }
             for &code in joint.kinds {
                 ChannelKind::from_code(code).ok_or(Error::HeaderChannelKind { code })?;
@@ -320,7 +320,7 @@ impl<'a> Header<'a> {
 
     /// Clip duration in microseconds: `frame_count × frame_time`.
     pub fn duration_us(&self) -> u64 {
-        u64::from(self.frame_count) * u64::from(self.frame_time_ns) / 1000
+        u64::from(self.frame_count).wrapping_mul(u64::from(self.frame_time_ns)) / 1000
     }
 
     /// True for a servo clip's header form (SPEC.md §3.4.1): one unnamed
@@ -365,6 +365,8 @@ impl<'a> Header<'a> {
 
 /// Flags byte of a compact joint (§3.4): channel count in bits 0–2.
 const COMPACT_COUNT_MASK: u8 = 0x07;
+/// Largest channel count of a compact joint (§3.4: `n` is `0..=6`).
+const COMPACT_MAX_CHANNELS: u8 = 6;
 /// Compact joint flag: an End Site.
 const COMPACT_END_SITE: u8 = 0x08;
 /// Compact joint flag: a parent follows.
@@ -416,7 +418,9 @@ fn read_joint<'a>(r: &mut Reader<'a>, form: Form, index: u32) -> Result<Joint<'a
 fn read_compact_joint<'a>(r: &mut Reader<'a>, index: u32) -> Result<Joint<'a>, Error> {
     let bad = |r: &Reader<'_>| Error::HeaderMalformed { offset: r.pos() };
     let flags = r.u8().ok_or_else(|| bad(r))?;
-    if flags & !(COMPACT_COUNT_MASK | COMPACT_END_SITE | COMPACT_HAS_PARENT) != 0 {
+    if flags & !(COMPACT_COUNT_MASK | COMPACT_END_SITE | COMPACT_HAS_PARENT) != 0
+        || flags & COMPACT_COUNT_MASK > COMPACT_MAX_CHANNELS
+    {
         return Err(bad(r));
     }
     let parent = if flags & COMPACT_HAS_PARENT != 0 {
@@ -462,7 +466,7 @@ fn read_channel(r: &mut Reader<'_>, form: Form) -> Result<(u8, i32, i32), Error>
         let scale =
             |v: i64| (v << COMPACT_RANGE_SHIFT).clamp(i32::MIN.into(), i32::MAX.into()) as i32;
         let min = scale(i64::from(lo));
-        let max = scale(i64::from(lo) + i64::from(span));
+        let max = scale(i64::from(lo).wrapping_add(i64::from(span)));
         return Ok((COMPACT_UNIT_FROM_KIND, min, max));
     }
     let unit = r.u8().ok_or_else(|| bad(r))?;
@@ -487,9 +491,9 @@ impl<'a> Iterator for JointIter<'a> {
         if self.left == 0 {
             return None;
         }
-        self.left -= 1;
+        self.left = self.left.wrapping_sub(1);
         let j = read_joint(&mut self.reader, self.form, self.index).ok();
-        self.index += 1;
+        self.index = self.index.wrapping_add(1);
         j
     }
 }
@@ -519,7 +523,7 @@ impl<'a> Iterator for ChannelIter<'a> {
                 Some(j) if self.kind_pos < j.kinds.len() => break,
                 Some(_) => {
                     self.current = self.joints.next();
-                    self.joint_index += 1;
+                    self.joint_index = self.joint_index.wrapping_add(1);
                     self.kind_pos = 0;
                 }
                 None => {
@@ -531,9 +535,9 @@ impl<'a> Iterator for ChannelIter<'a> {
         }
         let joint = self.current?;
         let code = *joint.kinds.get(self.kind_pos)?;
-        self.kind_pos += 1;
+        self.kind_pos = self.kind_pos.wrapping_add(1);
         let (unit, min, max) = read_channel(&mut self.table, self.form).ok()?;
-        self.left -= 1;
+        self.left = self.left.wrapping_sub(1);
         let kind = ChannelKind::from_code(code)?;
         let unit = match (self.form, kind.is_rotation()) {
             (Form::Full, _) => Unit::from_code(unit)?,
@@ -548,5 +552,66 @@ impl<'a> Iterator for ChannelIter<'a> {
             min,
             max,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Full form (§3.1): 1 ns, 1 frame, `unit` nm, then `joints`.
+    fn full(unit: u8, joints: &[u8]) -> std::vec::Vec<u8> {
+        let mut b = std::vec![1, 1, unit];
+        b.extend_from_slice(joints);
+        b
+    }
+
+    #[test]
+    fn source_unit_zero_is_named() {
+        assert_eq!(
+            Header::parse(&full(0, &[0, 0]), false).err(),
+            Some(Error::HeaderSourceUnit)
+        );
+        assert_eq!(
+            Header::parse(&full(0, &[0]), true).err(),
+            Some(Error::HeaderSourceUnit)
+        );
+    }
+
+    #[test]
+    fn end_site_with_channels_is_named() {
+        // One joint: name "", no parent, offset 0 0 0, End Site, kinds [3];
+        // then one channel: unit 0, min 0, max 0.
+        let bytes = full(1, &[1, 0, 0, 0, 0, 0, 1, 1, 3, 1, 0, 0, 0]);
+        assert_eq!(
+            Header::parse(&bytes, false).err(),
+            Some(Error::HeaderEndSiteChannels { joint: 0 })
+        );
+        // Compact: flags n = 1 | End Site, name "", offset 0 0 0, kind 3,
+        // range lo 0 span 0.
+        let bytes = full(1, &[1, 0x09, 0, 0, 0, 0, 3, 0, 0]);
+        assert_eq!(
+            Header::parse(&bytes, true).err(),
+            Some(Error::HeaderEndSiteChannels { joint: 0 })
+        );
+        // The same joint without the End Site flag is valid.
+        assert!(Header::parse(&full(1, &[1, 0x01, 0, 0, 0, 0, 3, 0, 0]), true).is_ok());
+    }
+
+    #[test]
+    fn compact_channel_count_is_at_most_six() {
+        let joint = |n: u8| {
+            let mut j = std::vec![1, n, 0, 0, 0, 0];
+            j.extend(core::iter::repeat_n(3, usize::from(n)));
+            j.extend(core::iter::repeat_n(0, 2 * usize::from(n)));
+            full(1, &j)
+        };
+        let six = joint(6);
+        let six = Header::parse(&six, true).map(|h| h.channel_count());
+        assert_eq!(six.ok(), Some(6));
+        assert!(matches!(
+            Header::parse(&joint(7), true),
+            Err(Error::HeaderMalformed { .. })
+        ));
     }
 }

@@ -13,27 +13,25 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// The lints of Cargo.toml `[lints]` (no indexing, unwrap, expect, panic or
+// implicit overflow) hold for the library; tests may do all of these.
 #![cfg_attr(
-    not(test),
-    deny(
+    test,
+    allow(
         clippy::indexing_slicing,
         clippy::unwrap_used,
         clippy::expect_used,
-        clippy::panic
+        clippy::panic,
+        clippy::arithmetic_side_effects
     )
 )]
 
-#[cfg(feature = "std")]
+#[cfg(test)]
 extern crate std;
 
 #[cfg(any(feature = "codec-index", feature = "codec-pca-spline"))]
 mod bits;
 mod clip;
-#[cfg(any(
-    feature = "codec-index",
-    feature = "codec-pca-spline",
-    feature = "codec-predictive"
-))]
 mod codec;
 pub mod consts;
 mod error;
@@ -41,6 +39,8 @@ mod header;
 mod player;
 mod reader;
 mod rig;
+#[doc(hidden)]
+pub mod wire;
 
 pub use clip::{Clip, Section, Sections};
 pub use error::Error;

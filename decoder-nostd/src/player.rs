@@ -2,61 +2,8 @@
 //! over a fixed-size state owned by the caller's stack or a `static`.
 
 use crate::clip::Clip;
-#[cfg(feature = "codec-index")]
-use crate::codec::index::IndexCodec;
-#[cfg(feature = "codec-pca-spline")]
-use crate::codec::pca_spline::{Cursor, PcaSplineCodec};
-#[cfg(feature = "codec-predictive")]
-use crate::codec::predictive::PredictiveCodec;
-#[cfg(any(
-    feature = "codec-index",
-    feature = "codec-pca-spline",
-    feature = "codec-predictive"
-))]
-use crate::consts;
+use crate::codec::Codec;
 use crate::error::Error;
-
-/// The codec of a clip, validated.
-#[derive(Clone, Copy, Debug)]
-enum Codec<'a> {
-    #[cfg(feature = "codec-index")]
-    Index(IndexCodec<'a>),
-    #[cfg(feature = "codec-pca-spline")]
-    PcaSpline(PcaSplineCodec<'a>),
-    #[cfg(feature = "codec-predictive")]
-    Predictive(PredictiveCodec<'a>),
-    #[allow(dead_code)]
-    None(core::marker::PhantomData<&'a ()>),
-}
-
-fn open_codec<'a>(clip: &Clip<'a>) -> Result<Codec<'a>, Error> {
-    match clip.codec_id() {
-        #[cfg(feature = "codec-index")]
-        consts::SECTION_CODEC_INDEX => Ok(Codec::Index(IndexCodec::parse(
-            clip.codec_bytes(),
-            clip.header().channel_count(),
-            clip.header().frame_count(),
-        )?)),
-        #[cfg(feature = "codec-pca-spline")]
-        consts::SECTION_CODEC_PCA_SPLINE => Ok(Codec::PcaSpline(PcaSplineCodec::parse(
-            clip.codec_bytes(),
-            clip.header().channel_count(),
-            clip.header().frame_count(),
-        )?)),
-        #[cfg(feature = "codec-predictive")]
-        consts::SECTION_CODEC_PREDICTIVE => Ok(Codec::Predictive(PredictiveCodec::parse(
-            clip.codec_bytes(),
-            clip.header().channel_count(),
-            clip.header().frame_count(),
-        )?)),
-        _ => Err(Error::ContainerNoCodec),
-    }
-}
-
-/// Validates the codec section of a clip (called by [`Clip::parse`]).
-pub(crate) fn validate_codec(clip: &Clip<'_>) -> Result<(), Error> {
-    open_codec(clip).map(|_| ())
-}
 
 /// Plays a clip of at most `N` channels.
 ///
@@ -82,7 +29,7 @@ pub struct Player<'a, const N: usize> {
     cursor: u32,
     /// Where the `pca-spline` codec is in its segment list.
     #[cfg(feature = "codec-pca-spline")]
-    segment: Cursor<'a>,
+    segment: crate::codec::pca_spline::Cursor<'a>,
     /// `index`: the frame `state_frame`; `pca-spline`: its cache of key
     /// intervals (a larger `N` caches more groups).
     state: [i32; N],
@@ -99,7 +46,7 @@ impl<'a, const N: usize> Player<'a, N> {
                 capacity: N,
             });
         }
-        let codec = open_codec(clip)?;
+        let codec = clip.codec();
         #[cfg(feature = "codec-predictive")]
         if let Codec::Predictive(c) = &codec {
             if c.state_words() > N {
@@ -117,7 +64,7 @@ impl<'a, const N: usize> Player<'a, N> {
             state_frame: None,
             cursor: 0,
             #[cfg(feature = "codec-pca-spline")]
-            segment: Cursor::default(),
+            segment: crate::codec::pca_spline::Cursor::default(),
             state: [0; N],
         })
     }
@@ -144,7 +91,7 @@ impl<'a, const N: usize> Player<'a, N> {
         }
         let i = self.cursor;
         self.frame(i, out)?;
-        self.cursor = i + 1;
+        self.cursor = i.wrapping_add(1);
         Ok(Some(i))
     }
 
@@ -157,26 +104,28 @@ impl<'a, const N: usize> Player<'a, N> {
                 frames: self.frames,
             });
         }
-        if self.pose_at(u64::from(i) << 16, out) {
+        if self.pose_at(u64::from(i) << 16, out)? {
             return Ok(());
         }
-        self.seek(i);
+        self.seek(i)?;
         out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
         Ok(())
     }
 
     /// Codecs that evaluate any time directly (no frame history) decode
     /// the pose at `pos` (frames, 16.16) into `out` and return true.
-    fn pose_at(&mut self, pos: u64, out: &mut [i32]) -> bool {
+    fn pose_at(&mut self, pos: u64, out: &mut [i32]) -> Result<bool, Error> {
         match &self.codec {
             #[cfg(feature = "codec-pca-spline")]
-            Codec::PcaSpline(c) => {
-                c.decode_at(pos, &mut self.segment, out, &mut self.state);
-                true
-            }
+            Codec::PcaSpline(c) => c
+                .decode_at(pos, &mut self.segment, out, &mut self.state)
+                .map(|()| true)
+                .ok_or(Error::PlayerInvariant {
+                    frame: u32::try_from(pos >> 16).unwrap_or(u32::MAX),
+                }),
             _ => {
                 let _ = (pos, out);
-                false
+                Ok(false)
             }
         }
     }
@@ -189,19 +138,20 @@ impl<'a, const N: usize> Player<'a, N> {
         let out = self.output(out)?;
         let ns = t_us.saturating_mul(1000);
         let period = u64::from(self.frame_time_ns);
-        let whole = ns / period;
-        let frac = ((ns % period) << 16) / period;
-        let last = self.frames - 1;
+        // period > 0: frame_time_ns is validated non-zero (§3.2).
+        #[allow(clippy::arithmetic_side_effects)]
+        let (whole, frac) = (ns / period, ((ns % period) << 16) / period);
+        let last = self.frames.wrapping_sub(1);
         let pos = if whole >= u64::from(last) {
             u64::from(last) << 16
         } else {
             (whole << 16) | frac
         };
-        if self.pose_at(pos, out) {
+        if self.pose_at(pos, out)? {
             return Ok(());
         }
         if whole >= u64::from(last) {
-            self.seek(last);
+            self.seek(last)?;
             out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
             return Ok(());
         }
@@ -210,12 +160,14 @@ impl<'a, const N: usize> Player<'a, N> {
         if let Codec::Predictive(c) = self.codec {
             // The state holds two frames: frame i is `v2` once frame i + 1
             // is decoded, unless i + 1 starts a block.
-            if self.state_frame != Some(i + 1) || c.key_before(i + 1) == i + 1 {
-                self.seek(i);
+            if self.state_frame != Some(i.wrapping_add(1))
+                || c.key_before(i.wrapping_add(1)) == i.wrapping_add(1)
+            {
+                self.seek(i)?;
                 out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
-                self.seek(i + 1);
+                self.seek(i.wrapping_add(1))?;
             } else {
-                let v2 = self.state.get(self.channels..2 * self.channels);
+                let v2 = self.state.get(self.channels..self.channels.wrapping_mul(2));
                 out.copy_from_slice(v2.unwrap_or(&[]));
             }
             let next = self.state.get(..self.channels).unwrap_or(&[]);
@@ -224,11 +176,12 @@ impl<'a, const N: usize> Player<'a, N> {
             }
             return Ok(());
         }
-        self.seek(i);
+        self.seek(i)?;
         let now = self.state.get(..self.channels).unwrap_or(&[]);
         out.copy_from_slice(now);
         // Decode frame i + 1 into `out` without disturbing the state.
-        decode(&self.codec, i + 1, out);
+        let next = i.wrapping_add(1);
+        decode(&self.codec, next, out).ok_or(Error::PlayerInvariant { frame: next })?;
         for (o, &a) in out.iter_mut().zip(now) {
             *o = mix(a, *o, frac);
         }
@@ -245,13 +198,13 @@ impl<'a, const N: usize> Player<'a, N> {
     }
 
     /// Brings `state` to frame `i`, decoding as few frames as possible.
-    fn seek(&mut self, i: u32) {
+    fn seek(&mut self, i: u32) -> Result<(), Error> {
         if self.state_frame == Some(i) {
-            return;
+            return Ok(());
         }
         let key = self.key_before(i);
         let start = match self.state_frame {
-            Some(s) if s < i && s >= key => s + 1,
+            Some(s) if s < i && s >= key => s.wrapping_add(1),
             _ => key,
         };
         let codec = self.codec;
@@ -260,10 +213,18 @@ impl<'a, const N: usize> Player<'a, N> {
             Codec::Predictive(_) => &mut self.state[..],
             _ => self.state.get_mut(..self.channels).unwrap_or(&mut []),
         };
+        // No early exit: the loop stays as tight as before the check.
+        let mut ok = true;
         for f in start..=i {
-            decode(&codec, f, state);
+            ok &= decode(&codec, f, state).is_some();
+        }
+        if !ok {
+            // The state holds no whole frame now.
+            self.state_frame = None;
+            return Err(Error::PlayerInvariant { frame: i });
         }
         self.state_frame = Some(i);
+        Ok(())
     }
 
     fn key_before(&self, i: u32) -> u32 {
@@ -280,12 +241,12 @@ impl<'a, const N: usize> Player<'a, N> {
 /// `a + (b − a) · frac / 2^16` in wrapping fixed point (SPEC.md §6).
 fn mix(a: i32, b: i32, frac: u64) -> i32 {
     let d = i64::from(b.wrapping_sub(a));
-    a.wrapping_add(((d * frac as i64) >> 16) as i32)
+    a.wrapping_add((d.wrapping_mul(frac as i64) >> 16) as i32)
 }
 
 /// Decodes frame `f` into `values`, which hold frame `f - 1` if `f` is not
-/// a key frame.
-fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
+/// a key frame. `None` only if an invariant of the validated clip is broken.
+fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) -> Option<()> {
     match codec {
         #[cfg(feature = "codec-index")]
         Codec::Index(c) => c.decode_frame(f, values),
@@ -293,6 +254,7 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) {
         Codec::Predictive(c) => c.decode_frame(f, values),
         _ => {
             let _ = (f, values);
+            Some(())
         }
     }
 }

@@ -2,6 +2,8 @@
 //! returns `None` past the end, and callers turn that into a typed error.
 //! Varints and zigzag integers follow postcard's wire format (SPEC.md §3.1).
 
+use crate::wire;
+
 #[derive(Clone, Debug)]
 pub(crate) struct Reader<'a> {
     bytes: &'a [u8],
@@ -38,7 +40,7 @@ impl<'a> Reader<'a> {
 
     pub(crate) fn u8(&mut self) -> Option<u8> {
         let b = *self.bytes.get(self.pos)?;
-        self.pos += 1;
+        self.pos = self.pos.wrapping_add(1);
         Some(b)
     }
 
@@ -57,39 +59,20 @@ impl<'a> Reader<'a> {
     }
 
     /// LEB128 varint of at most 5 bytes whose value fits in `u32`
-    /// (postcard's `varint(u32)`); over-long or overflowing encodings fail.
+    /// (postcard's `varint(u32)`, SPEC.md §3.1): longer, unterminated or
+    /// overflowing encodings fail; over-long ones of at most 5 bytes
+    /// (`80 00` for 0) are accepted, as postcard accepts them
+    /// ([`wire::varint_u32`]).
     #[inline]
     pub(crate) fn varint_u32(&mut self) -> Option<u32> {
-        // One-byte values (most lengths, counts and small numbers) first.
-        if let Some(&b) = self.bytes.get(self.pos) {
-            if b < 0x80 {
-                self.pos += 1;
-                return Some(u32::from(b));
-            }
-        }
-        self.varint_long()
-    }
-
-    fn varint_long(&mut self) -> Option<u32> {
-        let mut value: u32 = 0;
-        for i in 0..5u32 {
-            let b = self.u8()?;
-            let chunk = u32::from(b & 0x7F);
-            if i == 4 && chunk > 0x0F {
-                return None;
-            }
-            value |= chunk << (7 * i);
-            if b & 0x80 == 0 {
-                return Some(value);
-            }
-        }
-        None
+        let (v, next) = wire::varint_u32(self.bytes, self.pos)?;
+        self.pos = next;
+        Some(v)
     }
 
     /// Zigzag-encoded `i32` (postcard's encoding of signed integers).
     pub(crate) fn zigzag_i32(&mut self) -> Option<i32> {
-        let u = self.varint_u32()?;
-        Some(((u >> 1) as i32) ^ -((u & 1) as i32))
+        self.varint_u32().map(wire::zigzag_decode)
     }
 
     /// A varint length followed by that many bytes (postcard's `&[u8]`).
@@ -126,6 +109,30 @@ mod tests {
             None
         );
         assert_eq!(Reader::new(&[0x80, 0x80]).varint_u32(), None);
+    }
+
+    /// One test per row of SPEC.md §3.1's canonical-vs-accepted table.
+    #[test]
+    fn varint_canonical_and_accepted() {
+        let read = |b: &[u8]| {
+            let mut r = Reader::new(b);
+            r.varint_u32().map(|v| (v, r.pos()))
+        };
+        // Canonical: the shortest form, the only one the encoder writes.
+        assert_eq!(read(&[0x00]), Some((0, 1)));
+        assert_eq!(read(&[0xAC, 0x02]), Some((300, 2)));
+        assert_eq!(read(&[0xFF, 0xFF, 0xFF, 0xFF, 0x0F]), Some((u32::MAX, 5)));
+        // Over-long (zero groups at the top) within 5 bytes: accepted.
+        assert_eq!(read(&[0x80, 0x00]), Some((0, 2)));
+        assert_eq!(read(&[0xAC, 0x82, 0x80, 0x80, 0x00]), Some((300, 5)));
+        // Six bytes or more: rejected, even with a value that fits.
+        assert_eq!(read(&[0x80, 0x80, 0x80, 0x80, 0x80, 0x00]), None);
+        // Fifth byte above 0x0F (the value needs more than 32 bits): rejected.
+        assert_eq!(read(&[0xFF, 0xFF, 0xFF, 0xFF, 0x10]), None);
+        assert_eq!(read(&[0x80, 0x80, 0x80, 0x80, 0x70]), None);
+        // Unterminated at the end of the input: rejected.
+        assert_eq!(read(&[0x80]), None);
+        assert_eq!(read(&[]), None);
     }
 
     #[test]

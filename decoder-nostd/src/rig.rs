@@ -54,25 +54,36 @@ impl RigServo {
     pub fn line_qus(&self, angle_mdeg: i64) -> Option<u16> {
         let (a0, a1) = (i64::from(self.angle_lo_mdeg), i64::from(self.angle_hi_mdeg));
         let (q0, q1) = (i64::from(self.pulse_lo_qus), i64::from(self.pulse_hi_qus));
-        let q = q0 + angle_mdeg.checked_sub(a0)?.checked_mul(q1 - q0)? / (a1 - a0).max(1);
+        let num = angle_mdeg
+            .checked_sub(a0)?
+            .checked_mul(q1.wrapping_sub(q0))?;
+        let q = q0.wrapping_add(num.checked_div(a1.wrapping_sub(a0).max(1))?);
         u16::try_from(q).ok()
     }
 
     /// The pulse for a decoded angle: clamped to the travel, then linear
-    /// between the two ends, rounded half up (integer arithmetic).
+    /// between the two ends, rounded half away from zero (integer
+    /// arithmetic, SPEC.md §3.5).
     pub fn pulse_qus(&self, angle_mdeg: i32) -> u16 {
         let (lo, hi) = (i64::from(self.angle_lo_mdeg), i64::from(self.angle_hi_mdeg));
         let a = i64::from(angle_mdeg).clamp(lo, hi);
-        let span = (hi - lo).max(1);
+        let span = hi.wrapping_sub(lo).max(1);
         let (p0, p1) = (i64::from(self.pulse_lo_qus), i64::from(self.pulse_hi_qus));
-        let num = (a - lo) * (p1 - p0);
+        let num = a.wrapping_sub(lo).wrapping_mul(p1.wrapping_sub(p0));
         // Round half away from zero, symmetric for reversed servos.
         let q = if num >= 0 {
-            (2 * num + span) / (2 * span)
+            num.wrapping_mul(2)
+                .wrapping_add(span)
+                .checked_div(span.wrapping_mul(2))
+                .unwrap_or(0)
         } else {
-            -((-2 * num + span) / (2 * span))
+            num.wrapping_mul(-2)
+                .wrapping_add(span)
+                .checked_div(span.wrapping_mul(2))
+                .unwrap_or(0)
+                .wrapping_neg()
         };
-        (p0 + q).clamp(0, i64::from(u16::MAX)) as u16
+        p0.wrapping_add(q).clamp(0, i64::from(u16::MAX)) as u16
     }
 
     /// The most the pulse may change per tick at `rate_mhz` for the speed
@@ -81,12 +92,15 @@ impl RigServo {
         if self.max_speed_mdeg_s == 0 {
             return 0;
         }
-        let span_mdeg =
-            (i64::from(self.angle_hi_mdeg) - i64::from(self.angle_lo_mdeg)).max(1) as u64;
+        let span_mdeg = i64::from(self.angle_hi_mdeg)
+            .wrapping_sub(i64::from(self.angle_lo_mdeg))
+            .max(1) as u64;
         let pulses = u64::from(self.pulse_lo_qus.abs_diff(self.pulse_hi_qus));
         // speed [mdeg/s] · pulses/span [qus/mdeg] / (rate_mhz / 1000) [1/s]
-        let num = u64::from(self.max_speed_mdeg_s) * pulses * 1000;
-        let den = span_mdeg * u64::from(rate_mhz.max(1));
+        let num = u64::from(self.max_speed_mdeg_s)
+            .wrapping_mul(pulses)
+            .wrapping_mul(1000);
+        let den = span_mdeg.wrapping_mul(u64::from(rate_mhz.max(1)));
         num.div_ceil(den).clamp(1, u64::from(u16::MAX)) as u16
     }
 
@@ -168,7 +182,7 @@ impl<'a> Rig<'a> {
             if left == 0 {
                 return None;
             }
-            left -= 1;
+            left = left.wrapping_sub(1);
             let s = if compact {
                 read_compact_servo(&mut r, prev.as_ref())
             } else {
@@ -188,12 +202,14 @@ impl<'a> Rig<'a> {
 /// Servo ticks over `duration_us` at `rate_mhz`: one at t = 0, then one
 /// per period up to the duration (SPEC.md §3.5).
 pub fn tick_count(duration_us: u64, rate_mhz: u32) -> u64 {
-    duration_us.saturating_mul(u64::from(rate_mhz)) / 1_000_000_000 + 1
+    (duration_us.saturating_mul(u64::from(rate_mhz)) / 1_000_000_000).wrapping_add(1)
 }
 
 /// Time of tick `i` at `rate_mhz`, µs: `i · 10^9 / rate_mhz` rounded down.
 pub fn tick_us(i: u64, rate_mhz: u32) -> u64 {
-    i.saturating_mul(1_000_000_000) / u64::from(rate_mhz.max(1))
+    i.saturating_mul(1_000_000_000)
+        .checked_div(u64::from(rate_mhz.max(1)))
+        .unwrap_or(0)
 }
 
 fn read_servo(r: &mut Reader<'_>) -> Option<RigServo> {
@@ -244,7 +260,7 @@ fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<Rig
         let hi32 = i32::try_from(lo.checked_add(span)?).ok()?;
         let (pulse_lo, pulse_hi) = if has(flag::SAME_MAP) {
             let p = prev?;
-            (p.line_qus(lo)?, p.line_qus(lo + span)?)
+            (p.line_qus(lo)?, p.line_qus(lo.wrapping_add(span))?)
         } else {
             let p0 = r.varint_u32()?;
             let p1 = i64::from(p0).checked_add(i64::from(r.zigzag_i32()?))?;
@@ -254,7 +270,7 @@ fn read_compact_servo(r: &mut Reader<'_>, prev: Option<&RigServo>) -> Option<Rig
     };
     let neutral_qus = if has(flag::MID_NEUTRAL) {
         // Both pulses fit u16, so the sum fits u32.
-        ((u32::from(pulse_lo_qus) + u32::from(pulse_hi_qus)) / 2) as u16
+        (u32::from(pulse_lo_qus).wrapping_add(u32::from(pulse_hi_qus)) / 2) as u16
     } else {
         u16::try_from(r.varint_u32()?).ok()?
     };

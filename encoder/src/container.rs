@@ -8,8 +8,8 @@ use serde::Serialize;
 use crate::fixed::FixedChannels;
 use crate::motion::Motion;
 
-/// CRC-32/ISO-HDLC, the same as the decoder's (SPEC.md §2.3).
-pub const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+/// CRC-32/ISO-HDLC with the decoder's parameters (SPEC.md §2.3).
+pub const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(mocap_decoder::wire::CRC_ALGORITHM);
 
 /// Header section, field for field in SPEC.md §3.1 order.
 #[derive(Serialize, Debug, Clone, PartialEq)]
@@ -172,15 +172,9 @@ impl<'a> ByteCursor<'a> {
 
     /// A varint as [`varint`] writes it.
     pub fn varint(&mut self) -> Option<u32> {
-        let mut v = 0u32;
-        for i in 0..5 {
-            let b = self.u8()?;
-            v |= u32::from(b & 0x7F) << (7 * i);
-            if b & 0x80 == 0 {
-                return Some(v);
-            }
-        }
-        None
+        let (v, next) = mocap_decoder::wire::varint_u32(self.bytes, self.at)?;
+        self.at = next;
+        Some(v)
     }
 }
 
@@ -195,7 +189,7 @@ pub fn varint(out: &mut Vec<u8>, mut v: u32) {
 
 /// Appends `v` zigzag-encoded as a postcard varint (SPEC.md §3.1).
 pub fn zigzag(out: &mut Vec<u8>, v: i32) {
-    varint(out, ((v << 1) ^ (v >> 31)) as u32);
+    varint(out, mocap_decoder::wire::zigzag_encode(v));
 }
 
 /// Assembles sections into a container: preamble, section table, payloads

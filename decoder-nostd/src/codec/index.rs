@@ -78,7 +78,7 @@ impl<'a> IndexCodec<'a> {
             delta_bits: delta.bits,
         };
         let needed_bits = codec.frame_bit_offset(frames);
-        let available_bits = (payload.len() as u64) * 8;
+        let available_bits = (payload.len() as u64).wrapping_mul(8);
         if needed_bits.div_ceil(8) != payload.len() as u64 {
             return Err(Error::IndexPayloadTruncated {
                 needed_bits,
@@ -98,7 +98,9 @@ impl<'a> IndexCodec<'a> {
         if self.key_interval == 0 {
             frame
         } else {
-            frame - frame % self.key_interval
+            #[allow(clippy::arithmetic_side_effects)] // key_interval > 0 here
+            let r = frame % self.key_interval;
+            frame.wrapping_sub(r)
         }
     }
 
@@ -109,13 +111,15 @@ impl<'a> IndexCodec<'a> {
         } else {
             u64::from(frame).div_ceil(u64::from(self.key_interval))
         };
-        let deltas = u64::from(frame) - keys;
-        keys * self.key_bits + deltas * self.delta_bits
+        let deltas = u64::from(frame).wrapping_sub(keys);
+        keys.wrapping_mul(self.key_bits)
+            .wrapping_add(deltas.wrapping_mul(self.delta_bits))
     }
 
     /// Decodes frame `frame` into `state`, which must hold frame `frame - 1`
-    /// when `frame` is a delta frame (§4.3).
-    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) {
+    /// when `frame` is a delta frame (§4.3). `None` (with `state` partly
+    /// written) only if an invariant of the validated section is broken.
+    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
         let set = if self.is_key(frame) {
             // A key frame defines every channel from scratch (§4.3).
             state.fill(0);
@@ -128,12 +132,10 @@ impl<'a> IndexCodec<'a> {
         let groups = r.u16_le().unwrap_or(0);
         for _ in 0..groups {
             let Some(&[width, shift_flags, c0, c1]) = r.take(GROUP_HEADER_LEN) else {
-                return;
+                return None;
             };
             let count = usize::from(u16::from_le_bytes([c0, c1]));
-            let Some(entries) = r.take(count.saturating_mul(ENTRY_LEN)) else {
-                return;
-            };
+            let entries = r.take(count.saturating_mul(ENTRY_LEN))?;
             let width = u32::from(width);
             let shift = u32::from(shift_flags & SHIFT_MASK);
             // Two copies of the loop so the accumulate test is per group,
@@ -144,6 +146,7 @@ impl<'a> IndexCodec<'a> {
                 decode_group::<false>(entries, self.table, &mut bits, width, shift, state);
             }
         }
+        Some(())
     }
 }
 
@@ -165,8 +168,8 @@ fn decode_group<const ACCUMULATE: bool>(
         let word = u32::from_le_bytes([e[0], e[1], e[2], e[3]]);
         let base = i32::from_le_bytes([e[4], e[5], e[6], e[7]]);
         let idx = bits.read(width);
-        let at = (((word >> 16) + idx) as usize) * 2;
-        let entry = match table.get(at..at + 2) {
+        let at = ((word >> 16).wrapping_add(idx) as usize).wrapping_mul(2);
+        let entry = match table.get(at..at.wrapping_add(2)) {
             Some(&[lo, hi]) => i16::from_le_bytes([lo, hi]),
             _ => 0,
         };
@@ -212,16 +215,16 @@ fn check_set<'a>(
                 return Err(truncated);
             };
             let channel = u16::from_le_bytes([ch0, ch1]);
-            let end = u32::from(u16::from_le_bytes([o0, o1])) + (1u32 << width);
+            let end = u32::from(u16::from_le_bytes([o0, o1])).wrapping_add(1u32 << width);
             if usize::from(channel) >= channels || end > table_len {
                 return Err(Error::IndexDescriptor {
                     channel: u32::from(channel),
                 });
             }
         }
-        bits += u64::from(width) * count as u64;
-        entries += count as u64;
-        len += GROUP_HEADER_LEN + body.len();
+        bits = bits.wrapping_add(u64::from(width).wrapping_mul(count as u64));
+        entries = entries.wrapping_add(count as u64);
+        len = len.wrapping_add(GROUP_HEADER_LEN.wrapping_add(body.len()));
     }
     let bytes = start.clone().take(len).ok_or(truncated)?;
     Ok(SetInfo {

@@ -1,4 +1,8 @@
-//! The codecs, one module each, selected by cargo features.
+//! The codecs, one module each, selected by cargo features, and their
+//! dispatch: [`Codec`] is a codec section validated once by
+//! [`Clip::parse`](crate::Clip::parse) through [`open_codec`].
+
+use crate::error::Error;
 
 #[cfg(feature = "codec-index")]
 pub(crate) mod index;
@@ -8,3 +12,51 @@ pub(crate) mod pca_spline;
 pub(crate) mod predictive;
 #[cfg(feature = "codec-pca-spline")]
 pub(crate) mod spline;
+
+#[cfg(feature = "codec-index")]
+use index::IndexCodec;
+#[cfg(feature = "codec-pca-spline")]
+use pca_spline::PcaSplineCodec;
+#[cfg(feature = "codec-predictive")]
+use predictive::PredictiveCodec;
+
+/// The codec section of a clip, validated.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Codec<'a> {
+    #[cfg(feature = "codec-index")]
+    Index(IndexCodec<'a>),
+    #[cfg(feature = "codec-pca-spline")]
+    PcaSpline(PcaSplineCodec<'a>),
+    #[cfg(feature = "codec-predictive")]
+    Predictive(PredictiveCodec<'a>),
+    /// Never built: keeps `'a` used when every codec is compiled out.
+    #[allow(dead_code)]
+    None(core::marker::PhantomData<&'a ()>),
+}
+
+/// Validates the codec section `bytes` of id `id` against the header's
+/// channel and frame counts (SPEC.md §4–§5b); `ContainerNoCodec` for an id
+/// this build does not decode.
+pub(crate) fn open_codec<'a>(
+    id: u8,
+    bytes: &'a [u8],
+    channels: usize,
+    frames: u32,
+) -> Result<Codec<'a>, Error> {
+    let _ = (bytes, channels, frames);
+    match id {
+        #[cfg(feature = "codec-index")]
+        crate::consts::SECTION_CODEC_INDEX => {
+            Ok(Codec::Index(IndexCodec::parse(bytes, channels, frames)?))
+        }
+        #[cfg(feature = "codec-pca-spline")]
+        crate::consts::SECTION_CODEC_PCA_SPLINE => Ok(Codec::PcaSpline(PcaSplineCodec::parse(
+            bytes, channels, frames,
+        )?)),
+        #[cfg(feature = "codec-predictive")]
+        crate::consts::SECTION_CODEC_PREDICTIVE => Ok(Codec::Predictive(PredictiveCodec::parse(
+            bytes, channels, frames,
+        )?)),
+        _ => Err(Error::ContainerNoCodec),
+    }
+}

@@ -60,7 +60,7 @@ impl<'a> PredictiveCodec<'a> {
                 r.zigzag_i32().ok_or(bad("truncated channel record"))?;
             } else {
                 let m = mode >> MODE_STEP_SHIFT;
-                if m == 0 || u64::from(m) * u64::from(unit) > u64::from(MAX_STEP) {
+                if m == 0 || u64::from(m).wrapping_mul(u64::from(unit)) > u64::from(MAX_STEP) {
                     return Err(bad("step must be 1 ..= 2^30"));
                 }
             }
@@ -73,7 +73,9 @@ impl<'a> PredictiveCodec<'a> {
         let at = r.pos();
         let mut total: u64 = 0;
         for _ in 0..blocks {
-            total += u64::from(r.varint_u32().ok_or(bad("truncated block table"))?);
+            total = total.wrapping_add(u64::from(
+                r.varint_u32().ok_or(bad("truncated block table"))?,
+            ));
         }
         let lengths = bytes.get(at..r.pos()).ok_or(bad("truncated"))?;
         let data = r.rest();
@@ -92,12 +94,17 @@ impl<'a> PredictiveCodec<'a> {
 
     /// Player state words this clip needs.
     pub(crate) fn state_words(&self) -> usize {
-        3 * self.channels + STATE_EXTRA_WORDS
+        self.channels
+            .wrapping_mul(3)
+            .wrapping_add(STATE_EXTRA_WORDS)
     }
 
     /// The first frame of the block holding `frame`.
     pub(crate) fn key_before(&self, frame: u32) -> u32 {
-        frame - frame % self.block_frames
+        // block_frames > 0 (validated).
+        #[allow(clippy::arithmetic_side_effects)]
+        let r = frame % self.block_frames;
+        frame.wrapping_sub(r)
     }
 
     /// Byte range of block `b` in `data`.
@@ -113,25 +120,20 @@ impl<'a> PredictiveCodec<'a> {
 
     /// Decodes frame `frame` into `state` (at least [`Self::state_words`]
     /// words), which must hold frame `frame − 1` unless `frame` starts a
-    /// block. The frame's values are `state[..C]`.
-    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) {
+    /// block. The frame's values are `state[..C]`. `None` only if the state
+    /// is smaller than [`Self::state_words`] (`Player::new` refuses that).
+    pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
         let c = self.channels;
-        let Some((v1, rest)) = state.split_at_mut_checked(c) else {
-            return;
-        };
-        let Some((v2, rest)) = rest.split_at_mut_checked(c) else {
-            return;
-        };
-        let Some((ctx, rest)) = rest.split_at_mut_checked(c) else {
-            return;
-        };
-        let Some((probs, coder)) = rest.split_at_mut_checked(PROB_WORDS) else {
-            return;
-        };
+        let (v1, rest) = state.split_at_mut_checked(c)?;
+        let (v2, rest) = rest.split_at_mut_checked(c)?;
+        let (ctx, rest) = rest.split_at_mut_checked(c)?;
+        let (probs, coder) = rest.split_at_mut_checked(PROB_WORDS)?;
+        #[allow(clippy::arithmetic_side_effects)] // block_frames > 0 (validated)
         let j = frame % self.block_frames;
         let mut rc = if j == 0 {
-            probs.fill(i32::from(PROB_INIT) * 0x1_0001);
+            probs.fill(i32::from(PROB_INIT).wrapping_mul(0x1_0001));
             ctx.fill(0);
+            #[allow(clippy::arithmetic_side_effects)] // block_frames > 0
             let (start, end) = self.block(frame / self.block_frames);
             RangeDecoder::start(self.data, start, end)
         } else {
@@ -147,7 +149,7 @@ impl<'a> PredictiveCodec<'a> {
                 *x2 = k;
                 continue;
             }
-            let step = i64::from(mode >> MODE_STEP_SHIFT) * unit;
+            let step = i64::from(mode >> MODE_STEP_SHIFT).wrapping_mul(unit);
             let pred = predict(j, *x1, *x2, (mode & 3) as usize);
             let q = rc.residual(probs, (*cx as usize).min(CONTEXTS - 1));
             *x2 = *x1;
@@ -155,6 +157,7 @@ impl<'a> PredictiveCodec<'a> {
             *cx = q.unsigned_abs().min(2) as i32;
         }
         rc.store(coder);
+        Some(())
     }
 }
 
@@ -168,7 +171,7 @@ pub fn predict(j: u32, v1: i32, v2: i32, weight: usize) -> i64 {
         1 => p1,
         _ => {
             let a = PREDICTOR_WEIGHTS.get(weight).copied().unwrap_or(0);
-            p1 + ((a * (p1 - p2)) >> 2)
+            p1.wrapping_add(a.wrapping_mul(p1.wrapping_sub(p2)) >> 2)
         }
     }
 }
@@ -260,17 +263,17 @@ impl<'a> RangeDecoder<'a> {
         let Some(word) = probs.get_mut(i / 2) else {
             return 0;
         };
-        let shift = 16 * (i % 2) as u32;
+        let shift = ((i % 2) as u32).wrapping_mul(16);
         let mut p = ((*word as u32) >> shift) & 0xFFFF;
         let bound = (self.range >> PROB_BITS).wrapping_mul(p);
         let bit = if self.code < bound {
             self.range = bound;
-            p += ((1 << PROB_BITS) - p) >> MOVE_BITS;
+            p = p.wrapping_add((1u32 << PROB_BITS).wrapping_sub(p) >> MOVE_BITS);
             0
         } else {
             self.code = self.code.wrapping_sub(bound);
             self.range = self.range.wrapping_sub(bound);
-            p -= p >> MOVE_BITS;
+            p = p.wrapping_sub(p >> MOVE_BITS);
             1
         };
         *word = (((*word as u32) & !(0xFFFF << shift)) | (p << shift)) as i32;
@@ -293,29 +296,31 @@ impl<'a> RangeDecoder<'a> {
 
     /// A residual in context `cx` (SPEC.md §5b binarisation).
     fn residual(&mut self, probs: &mut [i32], cx: usize) -> i64 {
-        let base = cx * PROBS_PER_CONTEXT;
+        let base = cx.wrapping_mul(PROBS_PER_CONTEXT);
         if self.bit(probs, base) == 0 {
             return 0;
         }
-        let negative = self.bit(probs, base + 1) == 1;
+        let negative = self.bit(probs, base.wrapping_add(1)) == 1;
         let mut a: u32 = 1;
-        while a <= MAGNITUDE_STEPS && self.bit(probs, base + 1 + a as usize) == 1 {
-            a += 1;
+        while a <= MAGNITUDE_STEPS
+            && self.bit(probs, base.wrapping_add(1).wrapping_add(a as usize)) == 1
+        {
+            a = a.wrapping_add(1);
         }
         let mut magnitude = i64::from(a);
         if a > MAGNITUDE_STEPS {
             let mut n = 0;
             while n < MAX_ESCAPE_BITS && self.direct() == 1 {
-                n += 1;
+                n = n.wrapping_add(1);
             }
             let mut r: i64 = 0;
             for _ in 0..n {
                 r = (r << 1) | i64::from(self.direct());
             }
-            magnitude += (1i64 << n) - 1 + r;
+            magnitude = magnitude.wrapping_add((1i64 << n).wrapping_sub(1).wrapping_add(r));
         }
         if negative {
-            -magnitude
+            magnitude.wrapping_neg()
         } else {
             magnitude
         }

@@ -32,7 +32,10 @@ fn weights_short(t: [u32; 4], pos: u64) -> [i32; 4] {
     let from = t1 << FRAC_BITS;
     let pos = (pos.min(u64::from(t2) << FRAC_BITS) as u32).max(from);
     let (ra, rb) = ratios(t);
-    weights_at((pos - from) / (t2 - t1), ra, rb)
+    // t1 < t2: key times strictly increase (validated, §5.3).
+    #[allow(clippy::arithmetic_side_effects)]
+    let u = pos.wrapping_sub(from) / t2.wrapping_sub(t1);
+    weights_at(u, ra, rb)
 }
 
 /// The tangent ratios of an interval, `ra = span·2^16 / (t2 − t0)` and
@@ -54,8 +57,8 @@ pub(crate) fn ratios(t: [u32; 4]) -> (i32, i32) {
 /// the `i64` formula computed in `i32`; the squares use 64-bit products.
 #[inline(always)]
 pub(crate) fn weights_at(u: u32, ra: i32, rb: i32) -> [i32; 4] {
-    let u2 = ((u64::from(u) * u64::from(u)) >> FRAC_BITS) as u32;
-    let u3 = ((u64::from(u2) * u64::from(u)) >> FRAC_BITS) as i32;
+    let u2 = (u64::from(u).wrapping_mul(u64::from(u)) >> FRAC_BITS) as u32;
+    let u3 = (u64::from(u2).wrapping_mul(u64::from(u)) >> FRAC_BITS) as i32;
     let (u, u2) = (u as i32, u2 as i32);
     let one = ONE as i32;
     // Wrapping only matters outside the documented ranges (never for a
@@ -82,23 +85,36 @@ fn weights_long(t: [u32; 4], pos: u64) -> [i32; 4] {
     if !(t0 <= t1 && t1 < t2 && t2 <= t3) {
         return [0, 1 << FRAC_BITS, 0, 0];
     }
-    let span = t2 - t1;
+    let span = t2.wrapping_sub(t1);
     let from = t1 << FRAC_BITS;
     let pos = (pos.min(i64::MAX as u64) as i64).clamp(from, t2 << FRAC_BITS);
     // u in [0, 1] as 16.16.
-    let u = (pos - from) / span;
-    let u2 = (u * u) >> FRAC_BITS;
-    let u3 = (u2 * u) >> FRAC_BITS;
-    let h00 = 2 * u3 - 3 * u2 + ONE;
-    let h10 = u3 - 2 * u2 + u;
-    let h01 = 3 * u2 - 2 * u3;
-    let h11 = u3 - u2;
+    // span > 0, t2 − t0 > 0, t3 − t1 > 0: checked above.
+    #[allow(clippy::arithmetic_side_effects)]
+    let u = pos.wrapping_sub(from) / span;
+    let u2 = u.wrapping_mul(u) >> FRAC_BITS;
+    let u3 = u2.wrapping_mul(u) >> FRAC_BITS;
+    let h00 = u3
+        .wrapping_mul(2)
+        .wrapping_sub(u2.wrapping_mul(3))
+        .wrapping_add(ONE);
+    let h10 = u3.wrapping_sub(u2.wrapping_mul(2)).wrapping_add(u);
+    let h01 = u2.wrapping_mul(3).wrapping_sub(u3.wrapping_mul(2));
+    let h11 = u3.wrapping_sub(u2);
     // Tangents scaled to the interval: (P[i+1] - P[i-1]) · span / (t2 - t0).
-    let ra = (span << FRAC_BITS) / (t2 - t0);
-    let rb = (span << FRAC_BITS) / (t3 - t1);
-    let x = (h10 * ra) >> FRAC_BITS;
-    let y = (h11 * rb) >> FRAC_BITS;
-    [-x, h00 - y, h01 + x, y].map(|w| w as i32)
+    #[allow(clippy::arithmetic_side_effects)]
+    let ra = (span << FRAC_BITS) / t2.wrapping_sub(t0);
+    #[allow(clippy::arithmetic_side_effects)]
+    let rb = (span << FRAC_BITS) / t3.wrapping_sub(t1);
+    let x = h10.wrapping_mul(ra) >> FRAC_BITS;
+    let y = h11.wrapping_mul(rb) >> FRAC_BITS;
+    [
+        x.wrapping_neg(),
+        h00.wrapping_sub(y),
+        h01.wrapping_add(x),
+        y,
+    ]
+    .map(|w| w as i32)
 }
 
 /// `Σ w·p` rounded back from 16.16, with 64-bit intermediates.
@@ -106,7 +122,11 @@ fn weights_long(t: [u32; 4], pos: u64) -> [i32; 4] {
 pub fn apply(w: [i32; 4], p: [i32; 4]) -> i32 {
     let [w0, w1, w2, w3] = w.map(i64::from);
     let [p0, p1, p2, p3] = p.map(i64::from);
-    let acc = (1i64 << (FRAC_BITS - 1)) + w0 * p0 + w1 * p1 + w2 * p2 + w3 * p3;
+    let acc = (1i64 << (FRAC_BITS - 1))
+        .wrapping_add(w0.wrapping_mul(p0))
+        .wrapping_add(w1.wrapping_mul(p1))
+        .wrapping_add(w2.wrapping_mul(p2))
+        .wrapping_add(w3.wrapping_mul(p3));
     (acc >> FRAC_BITS) as i32
 }
 
