@@ -4,6 +4,7 @@
 use crate::clip::Clip;
 use crate::codec::Codec;
 use crate::error::Error;
+use core::num::NonZeroU64;
 
 /// Plays a clip of at most `N` channels.
 ///
@@ -22,7 +23,8 @@ pub struct Player<'a, const N: usize> {
     codec: Codec<'a>,
     channels: usize,
     frames: u32,
-    frame_time_ns: u32,
+    /// Frame time in ns, validated non-zero (§3.2): dividing by it cannot panic.
+    frame_time_ns: NonZeroU64,
     /// The frame held in `state`, if any.
     state_frame: Option<u32>,
     /// Next frame [`Player::next_frame`] returns.
@@ -60,7 +62,8 @@ impl<'a, const N: usize> Player<'a, N> {
             codec,
             channels,
             frames: header.frame_count(),
-            frame_time_ns: header.frame_time_ns(),
+            frame_time_ns: NonZeroU64::new(u64::from(header.frame_time_ns()))
+                .ok_or(Error::PlayerInvariant { frame: 0 })?,
             state_frame: None,
             cursor: 0,
             #[cfg(feature = "codec-pca-spline")]
@@ -108,7 +111,7 @@ impl<'a, const N: usize> Player<'a, N> {
             return Ok(());
         }
         self.seek(i)?;
-        out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
+        copy_values(out, &self.state);
         Ok(())
     }
 
@@ -137,9 +140,7 @@ impl<'a, const N: usize> Player<'a, N> {
     pub fn sample_at(&mut self, t_us: u64, out: &mut [i32]) -> Result<(), Error> {
         let out = self.output(out)?;
         let ns = t_us.saturating_mul(1000);
-        let period = u64::from(self.frame_time_ns);
-        // period > 0: frame_time_ns is validated non-zero (§3.2).
-        #[allow(clippy::arithmetic_side_effects)]
+        let period = self.frame_time_ns;
         let (whole, frac) = (ns / period, ((ns % period) << 16) / period);
         let last = self.frames.wrapping_sub(1);
         let pos = if whole >= u64::from(last) {
@@ -152,7 +153,7 @@ impl<'a, const N: usize> Player<'a, N> {
         }
         if whole >= u64::from(last) {
             self.seek(last)?;
-            out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
+            copy_values(out, &self.state);
             return Ok(());
         }
         let i = whole as u32;
@@ -164,11 +165,11 @@ impl<'a, const N: usize> Player<'a, N> {
                 || c.key_before(i.wrapping_add(1)) == i.wrapping_add(1)
             {
                 self.seek(i)?;
-                out.copy_from_slice(self.state.get(..self.channels).unwrap_or(&[]));
+                copy_values(out, &self.state);
                 self.seek(i.wrapping_add(1))?;
             } else {
                 let v2 = self.state.get(self.channels..self.channels.wrapping_mul(2));
-                out.copy_from_slice(v2.unwrap_or(&[]));
+                copy_values(out, v2.unwrap_or(&[]));
             }
             let next = self.state.get(..self.channels).unwrap_or(&[]);
             for (o, &b) in out.iter_mut().zip(next) {
@@ -178,7 +179,7 @@ impl<'a, const N: usize> Player<'a, N> {
         }
         self.seek(i)?;
         let now = self.state.get(..self.channels).unwrap_or(&[]);
-        out.copy_from_slice(now);
+        copy_values(out, now);
         // Decode frame i + 1 into `out` without disturbing the state.
         let next = i.wrapping_add(1);
         decode(&self.codec, next, out).ok_or(Error::PlayerInvariant { frame: next })?;
@@ -256,5 +257,13 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) -> Option<()> {
             let _ = (f, values);
             Some(())
         }
+    }
+}
+
+/// Copies the first `dst.len()` values of `src` into `dst` (as many as
+/// both hold): a `copy_from_slice` without its length-mismatch panic.
+fn copy_values(dst: &mut [i32], src: &[i32]) {
+    for (d, &s) in dst.iter_mut().zip(src) {
+        *d = s;
     }
 }

@@ -66,7 +66,8 @@ impl RigServo {
     /// arithmetic, SPEC.md §3.5).
     pub fn pulse_qus(&self, angle_mdeg: i32) -> u16 {
         let (lo, hi) = (i64::from(self.angle_lo_mdeg), i64::from(self.angle_hi_mdeg));
-        let a = i64::from(angle_mdeg).clamp(lo, hi);
+        // max then min, not clamp: no panic for a hand-built servo with lo > hi.
+        let a = i64::from(angle_mdeg).max(lo).min(hi);
         let span = hi.wrapping_sub(lo).max(1);
         let (p0, p1) = (i64::from(self.pulse_lo_qus), i64::from(self.pulse_hi_qus));
         let num = a.wrapping_sub(lo).wrapping_mul(p1.wrapping_sub(p0));

@@ -14,6 +14,7 @@ use crate::consts::predictive::{
 };
 use crate::error::Error;
 use crate::reader::Reader;
+use core::num::NonZeroU32;
 
 /// Probabilities in the state.
 const PROBS: usize = CONTEXTS * PROBS_PER_CONTEXT;
@@ -26,7 +27,8 @@ const CONSTANT_RESERVED: u32 = !MODE_CONSTANT;
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PredictiveCodec<'a> {
     channels: usize,
-    block_frames: u32,
+    /// Frames per block, validated non-zero: dividing by it cannot panic.
+    block_frames: NonZeroU32,
     unit: u32,
     /// The `C` channel records.
     modes: &'a [u8],
@@ -47,9 +49,9 @@ impl<'a> PredictiveCodec<'a> {
         }
         let block_frames = r.varint_u32().ok_or(bad("truncated"))?;
         let unit = r.varint_u32().ok_or(bad("truncated"))?;
-        if block_frames == 0 || unit == 0 {
+        let (Some(block_frames), true) = (NonZeroU32::new(block_frames), unit != 0) else {
             return Err(bad("block length and unit must be positive"));
-        }
+        };
         let at = r.pos();
         for _ in 0..channels {
             let mode = r.varint_u32().ok_or(bad("truncated channel record"))?;
@@ -67,7 +69,7 @@ impl<'a> PredictiveCodec<'a> {
         }
         let modes = bytes.get(at..r.pos()).ok_or(bad("truncated"))?;
         let blocks = r.varint_u32().ok_or(bad("truncated"))?;
-        if blocks != frames.div_ceil(block_frames) {
+        if blocks != frames.div_ceil(block_frames.get()) {
             return Err(bad("block count must be ceil(frames / block length)"));
         }
         let at = r.pos();
@@ -101,8 +103,6 @@ impl<'a> PredictiveCodec<'a> {
 
     /// The first frame of the block holding `frame`.
     pub(crate) fn key_before(&self, frame: u32) -> u32 {
-        // block_frames > 0 (validated).
-        #[allow(clippy::arithmetic_side_effects)]
         let r = frame % self.block_frames;
         frame.wrapping_sub(r)
     }
@@ -128,12 +128,10 @@ impl<'a> PredictiveCodec<'a> {
         let (v2, rest) = rest.split_at_mut_checked(c)?;
         let (ctx, rest) = rest.split_at_mut_checked(c)?;
         let (probs, coder) = rest.split_at_mut_checked(PROB_WORDS)?;
-        #[allow(clippy::arithmetic_side_effects)] // block_frames > 0 (validated)
         let j = frame % self.block_frames;
         let mut rc = if j == 0 {
             probs.fill(i32::from(PROB_INIT).wrapping_mul(0x1_0001));
             ctx.fill(0);
-            #[allow(clippy::arithmetic_side_effects)] // block_frames > 0
             let (start, end) = self.block(frame / self.block_frames);
             RangeDecoder::start(self.data, start, end)
         } else {
