@@ -68,6 +68,25 @@ pub fn skipped(why: &str) {
     let _ = writeln!(std::io::stderr().lock(), "SKIPPED: {test}: {why}");
 }
 
+/// The firmware's boards, in the order of the one board table
+/// (`scripts/boards.sh`, which the scripts read too).
+pub fn boards() -> Vec<String> {
+    let path = workspace_root().join("scripts/boards.sh");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let table = text
+        .split("MOCAP_BOARD_TABLE='")
+        .nth(1)
+        .and_then(|rest| rest.split('\'').next())
+        .unwrap_or_else(|| panic!("{}: no MOCAP_BOARD_TABLE", path.display()));
+    let boards: Vec<String> = table
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .map(str::to_string)
+        .collect();
+    assert!(!boards.is_empty(), "{}: empty board table", path.display());
+    boards
+}
+
 /// The workspace root.
 pub fn workspace_root() -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))

@@ -26,8 +26,6 @@ use mocap_tests::{
     workspace_root,
 };
 
-const BOARDS: [&str; 3] = ["microbit", "lm3s6965", "mps2-an386"];
-
 /// Sample mode period: a 50 Hz servo rate, which falls between the frames of
 /// a 120 Hz clip.
 const SERVO_PERIOD_US: u64 = 20_000;
@@ -98,7 +96,7 @@ fn check_codec(
             (text, format!("{n} samples every {p} us"))
         }
     };
-    for board in BOARDS {
+    for board in &mocap_tests::boards() {
         let uart = run_board(board, &path, sample_us);
         let data = data_lines(&uart);
         assert!(
@@ -220,7 +218,7 @@ fn serial_lines(clip: &Clip<'_>, protocol: mocap_encoder::play::Protocol) -> Str
 /// its tick lines with `expected` (and its `# output=` line with `header`),
 /// and with the snapshot `case`.
 fn check_servo_output(case: &str, path: &Path, output: &str, expected: &str, header: Option<&str>) {
-    for board in BOARDS {
+    for board in &mocap_tests::boards() {
         let uart = run_board_with(board, path, None, Some(output));
         if let Some(header) = header {
             // The peripheral the host simulated is the firmware's.

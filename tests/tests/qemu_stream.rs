@@ -45,7 +45,6 @@ use mocap_servo::{Limiter, ServoLimits};
 use mocap_tests::snapshot::check_snapshot;
 use mocap_tests::{qemu_available, run_firmware, servo_demo_clip, workspace_root};
 
-const BOARDS: [&str; 3] = ["microbit", "lm3s6965", "mps2-an386"];
 /// One byte in this many is hit by a random non-zero XOR.
 const CORRUPT_ONE_IN: u64 = 100;
 /// The seed of the corrupted upload (one pass and the carousel).
@@ -631,7 +630,7 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
         ),
     ];
 
-    for board in BOARDS {
+    for board in &mocap_tests::boards() {
         for input in &inputs {
             let Input {
                 name,
