@@ -4,7 +4,7 @@
 use crate::clip::Clip;
 use crate::codec::Codec;
 use crate::error::Error;
-use core::num::NonZeroU64;
+use core::num::{NonZeroU32, NonZeroU64};
 
 /// Plays a clip of at most `N` channels.
 ///
@@ -24,7 +24,7 @@ pub struct Player<'a, const N: usize> {
     channels: usize,
     frames: u32,
     /// Frame time in ns, validated non-zero (§3.2): dividing by it cannot panic.
-    frame_time_ns: NonZeroU64,
+    frame_time_ns: NonZeroU32,
     /// The frame held in `state`, if any.
     state_frame: Option<u32>,
     /// Next frame [`Player::next_frame`] returns.
@@ -62,7 +62,7 @@ impl<'a, const N: usize> Player<'a, N> {
             codec,
             channels,
             frames: header.frame_count(),
-            frame_time_ns: NonZeroU64::new(u64::from(header.frame_time_ns()))
+            frame_time_ns: NonZeroU32::new(header.frame_time_ns())
                 .ok_or(Error::PlayerInvariant { frame: 0 })?,
             state_frame: None,
             cursor: 0,
@@ -140,7 +140,7 @@ impl<'a, const N: usize> Player<'a, N> {
     pub fn sample_at(&mut self, t_us: u64, out: &mut [i32]) -> Result<(), Error> {
         let out = self.output(out)?;
         let ns = t_us.saturating_mul(1000);
-        let period = self.frame_time_ns;
+        let period = NonZeroU64::from(self.frame_time_ns);
         let (whole, frac) = (ns / period, ((ns % period) << 16) / period);
         let last = self.frames.wrapping_sub(1);
         let pos = if whole >= u64::from(last) {
@@ -263,7 +263,8 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) -> Option<()> {
 /// Copies the first `dst.len()` values of `src` into `dst` (as many as
 /// both hold): a `copy_from_slice` without its length-mismatch panic.
 fn copy_values(dst: &mut [i32], src: &[i32]) {
-    for (d, &s) in dst.iter_mut().zip(src) {
-        *d = s;
+    let n = dst.len().min(src.len());
+    if let (Some(d), Some(s)) = (dst.get_mut(..n), src.get(..n)) {
+        d.copy_from_slice(s);
     }
 }
