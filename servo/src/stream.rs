@@ -67,8 +67,10 @@ pub const MAX_MESSAGE_LEN: usize = 1 + 3 + 1 + 3 * MAX_POSE_SERVOS;
 /// Longest frame: COBS of the longest payload plus the delimiter.
 pub const MAX_FRAME_LEN: usize = cobs::max_encoding_length(MAX_MESSAGE_LEN + CRC_LEN) + 1;
 
+/// The clip's CRC parameters (one definition: the decoder's wire module),
+/// computed bitwise: the stream's messages are short, and no table in flash.
 const CRC32: crc::Crc<u32, crc::NoTable> =
-    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+    crc::Crc::<u32, crc::NoTable>::new(mocap_decoder::wire::CRC_ALGORITHM);
 
 /// One message of the serial protocol. The variant order is the wire tag:
 /// never reorder, only append (and bump [`PROTOCOL_VERSION`]).
