@@ -5,21 +5,6 @@ use mocap_report::track::som::SomConfig;
 use mocap_report::track::{build_reference, Track, TrackOptions};
 use mocap_tests::corpus_file;
 
-fn small_options() -> TrackOptions {
-    TrackOptions {
-        som: SomConfig {
-            width: 5,
-            height: 5,
-            epochs: 15,
-            seed: 11,
-            sigma_end: 0.7,
-        },
-        k: 8,
-        neighbours: Some(8),
-        ..TrackOptions::default()
-    }
-}
-
 #[test]
 fn corpus_decoded_clip_tracks_its_source() {
     let (Some(walk), Some(run)) = (
@@ -49,10 +34,20 @@ fn corpus_decoded_clip_tracks_its_source() {
         .iter()
         .map(|m| quat_frames(m, &joints).unwrap())
         .collect();
-    let mut opts = small_options();
-    opts.som.width = 8;
-    opts.som.height = 8;
-    opts.k = 12;
+    // A small map (8×8 SOM, k = 12) trained briefly: enough to separate a
+    // walk from a run, quick in a test.
+    let opts = TrackOptions {
+        som: SomConfig {
+            width: 8,
+            height: 8,
+            epochs: 15,
+            seed: 11,
+            sigma_end: 0.7,
+        },
+        k: 12,
+        neighbours: Some(8),
+        ..TrackOptions::default()
+    };
     let space = build_reference(&qs[..2].iter().collect::<Vec<_>>(), &opts).unwrap();
     let xy: Vec<_> = qs
         .iter()
