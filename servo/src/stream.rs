@@ -140,7 +140,9 @@ pub fn encode_frame(message: &Message<'_>, buf: &mut [u8]) -> Result<usize, Erro
     let message_len = postcard::to_slice(message, &mut payload)
         .map_err(|_| Error::FrameMessage)?
         .len();
-    let (message_bytes, rest) = payload.split_at_mut(message_len);
+    let (message_bytes, rest) = payload
+        .split_at_mut_checked(message_len)
+        .ok_or(Error::FrameMessage)?;
     let crc = CRC32.checksum(message_bytes).to_le_bytes();
     rest.get_mut(..CRC_LEN)
         .ok_or(Error::FrameMessage)?
@@ -299,7 +301,11 @@ impl<const CAP: usize> FrameReceiver<CAP> {
         let end = self.len.saturating_add(bytes.len());
         match self.buf.get_mut(self.len..end) {
             Some(slot) if !self.overflowed => {
-                slot.copy_from_slice(bytes);
+                // Equal lengths (the slot is `bytes.len()` long); a zip
+                // copy keeps copy_from_slice's length panic out.
+                for (s, &b) in slot.iter_mut().zip(bytes) {
+                    *s = b;
+                }
                 self.len = end;
             }
             _ => self.overflowed = true,
