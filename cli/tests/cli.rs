@@ -84,7 +84,7 @@ fn errors_read_as_before() {
 
     let o = mocap(&["encode", "/nonexistent.bvh", "-o", "x.mcb"]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(text(&o.stderr).starts_with("mocap: error: /nonexistent.bvh:0:0: cannot read file: "));
+    assert!(text(&o.stderr).starts_with("mocap: error: /nonexistent.bvh: cannot read file: "));
 
     let d = out_dir("errors");
     let s = d.join("s.mcb");
