@@ -156,9 +156,13 @@ pub(super) fn next_interval(
     let keys_at = rec
         .wrapping_add(2)
         .wrapping_add(n.wrapping_mul(k.wrapping_add(2)));
-    let mut r = Reader::new(body.get(keys_at..)?);
-    let keys = r.varint_u32()?;
-    let tb = u32::from(r.u8()?);
+    // The key count through the unrolled varint on the slice, not a
+    // `Reader`: the reader's out-of-line slow path would keep the reader
+    // in memory on the fast path too.
+    let keys_on = body.get(keys_at..)?;
+    let (keys, p) = wire::varint_u32_unrolled(keys_on, 0)?;
+    let (&tb, comps) = keys_on.get(p..)?.split_first()?;
+    let tb = u32::from(tb);
     let last = keys.saturating_sub(1);
     let next = at.i.wrapping_add(1);
     let sequential = at.tb != at.t2
@@ -168,7 +172,6 @@ pub(super) fn next_interval(
     if !sequential {
         return None;
     }
-    let comps = r.rest();
     let mut row_bits = 0usize;
     let mut p = 0;
     for _ in 0..k {
