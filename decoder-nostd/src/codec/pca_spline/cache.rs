@@ -261,12 +261,11 @@ impl<'a> PcaSplineCodec<'a> {
             let &[_, dst, nkm] = slots.first_chunk::<GROUP_HEAD>()?;
             let (n, k, _) = unpack(nkm);
             if k == 0 {
-                let target = self.target(dst, n, pose.out)?;
                 let (values, tail) = core::mem::take(&mut slots)
                     .get_mut(GROUP_HEAD..)
                     .and_then(|t| t.split_at_mut_checked(n))?;
                 slots = tail;
-                target.copy(values);
+                self.copy_group(dst, values, pose.out)?;
                 continue;
             }
             let size = (GROUP_HEAD + INTERVAL).wrapping_add(k.wrapping_mul(4));
@@ -313,6 +312,16 @@ impl<'a> PcaSplineCodec<'a> {
             }
             self.slot_group(hd[2], &mut slot, &mut pose);
         }
+        Some(())
+    }
+
+    /// Writes the values of a cached `k = 0` group (one per channel) where
+    /// its slot's `dst` word says. Out of line: one such group per pose at
+    /// most in practice, and inlined it costs the slot loop two registers
+    /// (a copy on every group).
+    #[inline(never)]
+    pub(super) fn copy_group(&self, dst: i32, values: &[i32], out: &mut [i32]) -> Option<()> {
+        self.target(dst, values.len(), out)?.copy(values);
         Some(())
     }
 
