@@ -156,11 +156,11 @@ pub(super) fn next_interval(
     let keys_at = rec
         .wrapping_add(2)
         .wrapping_add(n.wrapping_mul(k.wrapping_add(2)));
-    // The key count through the unrolled varint on the slice, not a
-    // `Reader`: the reader's out-of-line slow path would keep the reader
-    // in memory on the fast path too.
+    // The key count through the varint loop inlined on the slice, not a
+    // `Reader`: an out-of-line slow path (the reader's) would keep values
+    // in memory or in extra registers on the fast path too.
     let keys_on = body.get(keys_at..)?;
-    let (keys, p) = wire::varint_u32_unrolled(keys_on, 0)?;
+    let (keys, p) = wire::varint_u32_any(keys_on, 0)?;
     let (&tb, comps) = keys_on.get(p..)?.split_first()?;
     let tb = u32::from(tb);
     let last = keys.saturating_sub(1);

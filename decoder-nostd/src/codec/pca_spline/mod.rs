@@ -201,7 +201,7 @@ impl Iterator for Indices<'_> {
 /// up to three bytes (almost all) are matched in the same slice pattern as
 /// the width and shift: one bounds check, no call (going through
 /// [`wire::varint_u32_unrolled`] on the rest costs the sequential refill a
-/// second slice and its checks).
+/// second slice and its checks, and its out-of-line slow path registers).
 #[inline(always)]
 fn comp_at(comps: &[u8], p: usize) -> Option<(u32, u32, i32, usize)> {
     let zigzag = wire::zigzag_decode;
@@ -218,7 +218,9 @@ fn comp_at(comps: &[u8], p: usize) -> Option<(u32, u32, i32, usize)> {
             Some((wd.into(), sh.into(), zigzag(u), p.wrapping_add(5)))
         }
         [wd, sh, ..] => {
-            let (u, next) = wire::varint_u32(comps, p.wrapping_add(2))?;
+            // Inlined whole (no call: a call would cost the hot loops
+            // that read these records registers even when not taken).
+            let (u, next) = wire::varint_u32_any(comps, p.wrapping_add(2))?;
             Some((wd.into(), sh.into(), zigzag(u), next))
         }
         _ => None,
