@@ -78,8 +78,8 @@ impl<'a> Reader<'a> {
         self.varint_long()
     }
 
-    /// [`Reader::varint_u32`] of any length, out of line.
-    #[inline(never)]
+    /// [`Reader::varint_u32`] of any length (left to the compiler: inlined
+    /// where it is hot, as the patch scan's varints).
     fn varint_long(&mut self) -> Option<u32> {
         let (v, next) = wire::varint_u32_any(self.bytes, self.pos)?;
         self.pos = next;
