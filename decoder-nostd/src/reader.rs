@@ -65,7 +65,34 @@ impl<'a> Reader<'a> {
     /// ([`wire::varint_u32`]).
     #[inline]
     pub(crate) fn varint_u32(&mut self) -> Option<u32> {
-        let (v, next) = wire::varint_u32(self.bytes, self.pos)?;
+        // One-byte values (most lengths, counts and small numbers) first,
+        // here rather than through `wire::varint_u32`: its `(value, next)`
+        // result goes through memory, which costs the fast path a stack
+        // frame; the rest is a tail call that moves the cursor itself.
+        if let Some(&b) = self.bytes.get(self.pos) {
+            if b < 0x80 {
+                self.pos = self.pos.wrapping_add(1);
+                return Some(u32::from(b));
+            }
+        }
+        self.varint_long()
+    }
+
+    /// [`Reader::varint_u32`] with its slow path inlined too: for the
+    /// `pca-spline` patch scan (a call there costs its loop registers).
+    #[cfg(feature = "codec-pca-spline")]
+    #[inline(always)]
+    pub(crate) fn varint_u32_inline(&mut self) -> Option<u32> {
+        let (v, next) = wire::varint_u32_any(self.bytes, self.pos)?;
+        self.pos = next;
+        Some(v)
+    }
+
+    /// [`Reader::varint_u32`] of any length, out of line (inlined, it costs
+    /// the M0 `index` path 1.3 %).
+    #[inline(never)]
+    fn varint_long(&mut self) -> Option<u32> {
+        let (v, next) = wire::varint_u32_any(self.bytes, self.pos)?;
         self.pos = next;
         Some(v)
     }

@@ -72,6 +72,13 @@ pub fn varint_u32_unrolled(bytes: &[u8], at: usize) -> Option<(u32, usize)> {
 /// small where it is inlined.
 #[inline(never)]
 fn varint_long(bytes: &[u8], at: usize) -> Option<(u32, usize)> {
+    varint_u32_any(bytes, at)
+}
+
+/// [`varint_u32`] as one loop, inlined: for a caller's own out-of-line
+/// slow path (the decoder's `Reader`), which then needs no second call.
+#[inline(always)]
+pub(crate) fn varint_u32_any(bytes: &[u8], at: usize) -> Option<(u32, usize)> {
     let mut value: u32 = 0;
     for (i, &b) in (0u32..).zip(bytes.get(at..)?.iter().take(VARINT_MAX_LEN)) {
         let chunk = u32::from(b & 0x7F);

@@ -156,9 +156,13 @@ pub(super) fn next_interval(
     let keys_at = rec
         .wrapping_add(2)
         .wrapping_add(n.wrapping_mul(k.wrapping_add(2)));
-    let mut r = Reader::new(body.get(keys_at..)?);
-    let keys = r.varint_u32()?;
-    let tb = u32::from(r.u8()?);
+    // The key count through the varint loop inlined on the slice, not a
+    // `Reader`: an out-of-line slow path (the reader's) would keep values
+    // in memory or in extra registers on the fast path too.
+    let keys_on = body.get(keys_at..)?;
+    let (keys, p) = wire::varint_u32_any(keys_on, 0)?;
+    let (&tb, comps) = keys_on.get(p..)?.split_first()?;
+    let tb = u32::from(tb);
     let last = keys.saturating_sub(1);
     let next = at.i.wrapping_add(1);
     let sequential = at.tb != at.t2
@@ -168,7 +172,6 @@ pub(super) fn next_interval(
     if !sequential {
         return None;
     }
-    let comps = r.rest();
     let mut row_bits = 0usize;
     let mut p = 0;
     for _ in 0..k {
@@ -258,12 +261,11 @@ impl<'a> PcaSplineCodec<'a> {
             let &[_, dst, nkm] = slots.first_chunk::<GROUP_HEAD>()?;
             let (n, k, _) = unpack(nkm);
             if k == 0 {
-                let target = self.target(dst, n, pose.out)?;
                 let (values, tail) = core::mem::take(&mut slots)
                     .get_mut(GROUP_HEAD..)
                     .and_then(|t| t.split_at_mut_checked(n))?;
                 slots = tail;
-                target.copy(values);
+                self.copy_group(dst, values, pose.out)?;
                 continue;
             }
             let size = (GROUP_HEAD + INTERVAL).wrapping_add(k.wrapping_mul(4));
@@ -310,6 +312,16 @@ impl<'a> PcaSplineCodec<'a> {
             }
             self.slot_group(hd[2], &mut slot, &mut pose);
         }
+        Some(())
+    }
+
+    /// Writes the values of a cached `k = 0` group (one per channel) where
+    /// its slot's `dst` word says. Out of line: one such group per pose at
+    /// most in practice, and inlined it costs the slot loop two registers
+    /// (a copy on every group).
+    #[inline(never)]
+    pub(super) fn copy_group(&self, dst: i32, values: &[i32], out: &mut [i32]) -> Option<()> {
+        self.target(dst, values.len(), out)?.copy(values);
         Some(())
     }
 

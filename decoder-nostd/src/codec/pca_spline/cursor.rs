@@ -44,9 +44,9 @@ pub(super) fn relative(seg: &Segment<'_>, pos: u64) -> u32 {
 
 impl<'a> PcaSplineCodec<'a> {
     pub(super) fn read_patch(&self, r: &mut Reader<'a>) -> Option<(u32, usize, i32)> {
-        let delta = r.varint_u32()?;
+        let delta = r.varint_u32_inline()?;
         let c = Indices::new(r.take(self.width())?, self.wide).next()?;
-        let v = r.zigzag_i32()?;
+        let v = wire::zigzag_decode(r.varint_u32_inline()?);
         Some((delta, c, v))
     }
 

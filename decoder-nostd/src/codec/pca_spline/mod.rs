@@ -197,15 +197,34 @@ impl Iterator for Indices<'_> {
 }
 
 /// The component record (§5.3: u8 width, u8 shift, zigzag offset) at byte
-/// `p` of `comps`: width, shift, offset and the byte after it.
+/// `p` of `comps`: width, shift, offset and the byte after it. Offsets of
+/// up to three bytes (almost all) are matched in the same slice pattern as
+/// the width and shift: one bounds check, no call (going through
+/// [`wire::varint_u32_unrolled`] on the rest costs the sequential refill a
+/// second slice and its checks, and its out-of-line slow path registers).
 #[inline(always)]
 fn comp_at(comps: &[u8], p: usize) -> Option<(u32, u32, i32, usize)> {
-    let [wd, sh, ref offset @ ..] = *comps.get(p..)? else {
-        return None;
-    };
-    let (u, len) = wire::varint_u32_unrolled(offset, 0)?;
-    let next = p.wrapping_add(2).wrapping_add(len);
-    Some((wd.into(), sh.into(), wire::zigzag_decode(u), next))
+    let zigzag = wire::zigzag_decode;
+    match *comps.get(p..)? {
+        [wd, sh, o, ..] if o < 0x80 => {
+            Some((wd.into(), sh.into(), zigzag(o.into()), p.wrapping_add(3)))
+        }
+        [wd, sh, o, o2, ..] if o2 < 0x80 => {
+            let u = u32::from(o & 0x7F) | u32::from(o2) << 7;
+            Some((wd.into(), sh.into(), zigzag(u), p.wrapping_add(4)))
+        }
+        [wd, sh, o, o2, o3, ..] if o3 < 0x80 => {
+            let u = u32::from(o & 0x7F) | u32::from(o2 & 0x7F) << 7 | u32::from(o3) << 14;
+            Some((wd.into(), sh.into(), zigzag(u), p.wrapping_add(5)))
+        }
+        [wd, sh, ..] => {
+            // Inlined whole (no call: a call would cost the hot loops
+            // that read these records registers even when not taken).
+            let (u, next) = wire::varint_u32_any(comps, p.wrapping_add(2))?;
+            Some((wd.into(), sh.into(), zigzag(u), next))
+        }
+        _ => None,
+    }
 }
 
 impl<'a> PcaSplineCodec<'a> {
