@@ -17,6 +17,7 @@ pub mod encode;
 pub mod fixed;
 pub mod generate;
 pub mod kinematics;
+mod located;
 pub mod metrics;
 pub mod motion;
 pub mod play;

@@ -65,15 +65,7 @@ impl RigError {
 
 impl fmt::Display for RigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        // An I/O error has no position (line 0): `file: message`.
-        if self.line == 0 {
-            return write!(f, "{}: {}", self.file, self.message);
-        }
-        write!(
-            f,
-            "{}:{}:{}: {}",
-            self.file, self.line, self.column, self.message
-        )
+        crate::located::write_located(f, &self.file, self.line, self.column, &self.message)
     }
 }
 
