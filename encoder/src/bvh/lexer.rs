@@ -141,6 +141,22 @@ impl<'a> Lexer<'a> {
         })
     }
 
+    /// Fails with `too_many(found)` if a value follows on the current line;
+    /// a brace there is put back (it opens or closes the next block).
+    pub(super) fn expect_line_end(
+        &mut self,
+        too_many: impl FnOnce(&str) -> String,
+    ) -> Result<(), BvhError> {
+        match self.next_on_line() {
+            Some(t) if matches!(self.str(t), "{" | "}") => {
+                self.unread(t);
+                Ok(())
+            }
+            Some(t) => Err(self.error(t, too_many(self.str(t)))),
+            None => Ok(()),
+        }
+    }
+
     /// Puts back a token scanned on the current line.
     pub(super) fn unread(&mut self, t: Token) {
         debug_assert_eq!(t.line, self.line);

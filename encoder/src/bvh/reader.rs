@@ -94,19 +94,9 @@ pub(super) fn parse_hierarchy(lx: &mut Lexer<'_>) -> Result<(Vec<Joint>, Token),
                 };
                 *v = lx.parse_f64(n, "OFFSET")?;
             }
-            if let Some(extra) = lx.next_on_line() {
-                if matches!(lx.str(extra), "{" | "}") {
-                    lx.unread(extra);
-                } else {
-                    return Err(lx.error(
-                        extra,
-                        format!(
-                            "OFFSET of '{jname}' has more than 3 values (found '{}')",
-                            lx.str(extra)
-                        ),
-                    ));
-                }
-            }
+            lx.expect_line_end(|found| {
+                format!("OFFSET of '{jname}' has more than 3 values (found '{found}')")
+            })?;
             joints[open.joint].offset = offset;
         } else if word.eq_ignore_ascii_case("CHANNELS") {
             if open.end_site {
@@ -294,19 +284,11 @@ fn read_channels(lx: &mut Lexer<'_>, joint: &str) -> Result<Vec<ChannelKind>, Bv
         }
         kinds.push(kind);
     }
-    if let Some(extra) = lx.next_on_line() {
-        if matches!(lx.str(extra), "{" | "}") {
-            lx.unread(extra);
-        } else {
-            return Err(lx.error(
-                extra,
-                format!(
-                    "CHANNELS {count} in '{joint}' lists more than {count} channel names (found '{}')",
-                    lx.str(extra)
-                ),
-            ));
-        }
-    }
+    lx.expect_line_end(|found| {
+        format!(
+            "CHANNELS {count} in '{joint}' lists more than {count} channel names (found '{found}')"
+        )
+    })?;
     Ok(kinds)
 }
 
