@@ -6,8 +6,8 @@
 
 #[derive(Clone, Debug)]
 pub(crate) struct BitReader<'a> {
-    bytes: &'a [u8],
-    next_byte: usize,
+    /// The bytes not yet in `acc`.
+    rest: &'a [u8],
     acc: u32,
     avail: u32,
 }
@@ -17,8 +17,7 @@ impl<'a> BitReader<'a> {
     pub(crate) fn at(bytes: &'a [u8], bit: u64) -> Self {
         let byte = usize::try_from(bit / 8).unwrap_or(usize::MAX);
         let mut r = BitReader {
-            bytes,
-            next_byte: byte,
+            rest: bytes.get(byte..).unwrap_or(&[]),
             acc: 0,
             avail: 0,
         };
@@ -34,13 +33,18 @@ impl<'a> BitReader<'a> {
     pub(crate) fn read(&mut self, n: u32) -> u32 {
         let n = n & 15;
         if self.avail < 16 {
-            let at = self.next_byte;
-            let half = match self.bytes.get(at..at.wrapping_add(2)) {
-                Some(&[lo, hi]) => u32::from(u16::from_le_bytes([lo, hi])),
-                _ => u32::from(self.bytes.get(at).copied().unwrap_or(0)),
+            let half = match *self.rest {
+                [lo, hi, ref rest @ ..] => {
+                    self.rest = rest;
+                    u32::from(u16::from_le_bytes([lo, hi]))
+                }
+                [lo] => {
+                    self.rest = &[];
+                    u32::from(lo)
+                }
+                [] => 0,
             };
             self.acc |= half << self.avail;
-            self.next_byte = at.wrapping_add(2);
             self.avail = self.avail.wrapping_add(16);
         }
         let v = self.acc & (1u32 << n).wrapping_sub(1);
@@ -58,13 +62,19 @@ pub(crate) fn bits_at(bytes: &[u8], bit: usize, n: u32) -> u32 {
     let at = bit >> 3;
     if n <= 25 {
         // 25 bits past a shift of at most 7 fit in one 32-bit window.
-        if let Some(&[a, b, c, d]) = bytes.get(at..at.wrapping_add(4)) {
-            let word = u32::from_le_bytes([a, b, c, d]);
+        if let Some(quad) = bytes
+            .get(at..at.wrapping_add(4))
+            .and_then(|s| <[u8; 4]>::try_from(s).ok())
+        {
+            let word = u32::from_le_bytes(quad);
             return (word >> (bit & 7)) & 1u32.wrapping_shl(n).wrapping_sub(1);
         }
     }
-    let word = match bytes.get(at..at.wrapping_add(8)) {
-        Some(&[a, b, c, d, e, f, g, h]) => u64::from_le_bytes([a, b, c, d, e, f, g, h]),
+    let word = match bytes
+        .get(at..at.wrapping_add(8))
+        .and_then(|s| <[u8; 8]>::try_from(s).ok())
+    {
+        Some(octet) => u64::from_le_bytes(octet),
         _ => tail_word(bytes, at),
     };
     ((word >> (bit & 7)) as u32) & 1u32.wrapping_shl(n).wrapping_sub(1)

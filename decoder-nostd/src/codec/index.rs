@@ -169,9 +169,12 @@ fn decode_group<const ACCUMULATE: bool>(
         let base = i32::from_le_bytes([e[4], e[5], e[6], e[7]]);
         let idx = bits.read(width);
         let at = ((word >> 16).wrapping_add(idx) as usize).wrapping_mul(2);
-        let entry = match table.get(at..at.wrapping_add(2)) {
-            Some(&[lo, hi]) => i16::from_le_bytes([lo, hi]),
-            _ => 0,
+        let entry = match table
+            .get(at..at.wrapping_add(2))
+            .and_then(|s| <[u8; 2]>::try_from(s).ok())
+        {
+            Some(pair) => i16::from_le_bytes(pair),
+            None => 0,
         };
         let v = base.wrapping_add(i32::from(entry) << shift);
         if let Some(s) = state.get_mut((word & 0xFFFF) as usize) {
