@@ -54,6 +54,7 @@ extern crate std;
 
 pub mod bank;
 mod error;
+pub mod hard;
 pub mod limits;
 pub mod maestro;
 pub mod output;
@@ -68,6 +69,7 @@ mod test_rng;
 
 pub use bank::ServoBank;
 pub use error::{Error, OutputError};
+pub use hard::{Fit, HardLimit, HardLimits, HardStage, HardStep, Policy};
 pub use limits::{Limiter, ServoLimits};
 pub use output::ServoOutput;
 #[cfg(feature = "pca9685")]

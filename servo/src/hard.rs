@@ -1,0 +1,488 @@
+//! The figure's own hard limits: what the mechanism allows, whatever the
+//! clip, show or stream asks for.
+//!
+//! A clip carries the limits of the rig it was encoded for; a figure's
+//! firmware also knows its own ([`HardLimit`], one per controller output:
+//! pulse range, neutral, speed and acceleration, in physical units so one
+//! table serves every tick rate). [`HardStage`] applies them *after* the
+//! clip's own shaping ([`crate::Limiter`]): every pulse the playback loop
+//! writes passes both. Its state is the last pulse and the velocity of each
+//! servo, so acceleration is limited too, and a return to rest goes to the
+//! figure's neutral at the figure's speed and acceleration.
+//!
+//! [`HardLimits::fit`] tells whether a rig lies inside the figure's limits
+//! (every output known, every pulse range and neutral inside); the caller
+//! applies its policy ([`Policy`]) with it.
+
+use mocap_decoder::RigServo;
+
+/// One output of the figure: the pulses its mechanism allows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct HardLimit {
+    /// Controller output (the rig's `output`).
+    pub output: u16,
+    /// Lowest pulse, ¼ µs.
+    pub min_qus: u16,
+    /// Highest pulse, ¼ µs.
+    pub max_qus: u16,
+    /// Rest pulse, ¼ µs, in `min_qus..=max_qus`.
+    pub neutral_qus: u16,
+    /// Most the pulse may change per second, ¼ µs/s; 0 = no limit.
+    pub max_speed_qus_s: u32,
+    /// Most the pulse's speed may change per second, ¼ µs/s²; 0 = no limit.
+    pub max_accel_qus_s2: u32,
+}
+
+/// What to do with a clip whose rig is not the figure's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Policy {
+    /// Refuse it.
+    Refuse,
+    /// Play it, through the hard limits, if its every servo lies inside
+    /// them ([`Fit::Inside`]); refuse it otherwise.
+    ClampIfInside,
+    /// Play it through the hard limits whatever its rig says (every output
+    /// must still be one of the figure's).
+    ClampAlways,
+}
+
+/// How a rig lies against the figure's hard limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Fit {
+    /// Every servo's output is the figure's, and its pulse range and neutral
+    /// lie inside that output's limits.
+    Inside,
+    /// A servo's pulse range or neutral leaves its output's limits.
+    Outside {
+        /// The servo's output.
+        output: u16,
+    },
+    /// A servo drives an output the figure does not have.
+    UnknownOutput {
+        /// The servo's output.
+        output: u16,
+    },
+}
+
+/// A figure's hard limits: one [`HardLimit`] per output it has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct HardLimits<'a> {
+    limits: &'a [HardLimit],
+}
+
+impl<'a> HardLimits<'a> {
+    /// The figure's outputs (any order; the first entry of an output counts).
+    pub const fn new(limits: &'a [HardLimit]) -> Self {
+        HardLimits { limits }
+    }
+
+    /// Every output's limits.
+    pub const fn all(&self) -> &'a [HardLimit] {
+        self.limits
+    }
+
+    /// The limits of `output`, if the figure has it.
+    pub fn get(&self, output: u16) -> Option<&'a HardLimit> {
+        self.limits.iter().find(|l| l.output == output)
+    }
+
+    /// Whether `servos` lie inside these limits.
+    pub fn fit(&self, servos: &[RigServo]) -> Fit {
+        for s in servos {
+            let Some(h) = self.get(s.output) else {
+                return Fit::UnknownOutput { output: s.output };
+            };
+            let (lo, hi) = s.pulse_range_qus();
+            if lo < h.min_qus || hi > h.max_qus || !(lo..=hi).contains(&s.neutral_qus) {
+                return Fit::Outside { output: s.output };
+            }
+        }
+        Fit::Inside
+    }
+}
+
+/// One servo's hard limits at a tick rate, in ¼ µs per tick.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct HardStep {
+    /// Lowest pulse, ¼ µs.
+    pub min_qus: u16,
+    /// Highest pulse, ¼ µs.
+    pub max_qus: u16,
+    /// Rest pulse, ¼ µs.
+    pub neutral_qus: u16,
+    /// Most change per tick, ¼ µs; 0 = no limit.
+    pub max_step_qus: u16,
+    /// Most change of the per-tick change per tick, ¼ µs; 0 = no limit.
+    pub max_accel_qus: u16,
+}
+
+impl HardStep {
+    /// A pass-through: the whole `u16` range, no speed or acceleration limit.
+    pub const OPEN: HardStep = HardStep {
+        min_qus: 0,
+        max_qus: u16::MAX,
+        neutral_qus: 6000,
+        max_step_qus: 0,
+        max_accel_qus: 0,
+    };
+
+    /// `limit` at `rate_mhz` ticks per 1000 s: its speed as ¼ µs per tick
+    /// (rounded down, at least 1 when limited) and its acceleration as ¼ µs
+    /// per tick per tick (the same). A neutral outside the range is moved
+    /// into it.
+    pub fn at_rate(limit: &HardLimit, rate_mhz: u32) -> Self {
+        let rate = u64::from(rate_mhz.max(1));
+        let (min_qus, max_qus) = if limit.min_qus <= limit.max_qus {
+            (limit.min_qus, limit.max_qus)
+        } else {
+            (limit.max_qus, limit.min_qus)
+        };
+        let per_tick = |v: u64, den: u64| -> u16 {
+            if v == 0 {
+                0
+            } else {
+                u16::try_from(v.checked_div(den).unwrap_or(0).max(1)).unwrap_or(u16::MAX)
+            }
+        };
+        HardStep {
+            min_qus,
+            max_qus,
+            neutral_qus: limit.neutral_qus.clamp(min_qus, max_qus),
+            // v [qus/s] / (rate_mhz / 1000 [ticks/s]).
+            max_step_qus: per_tick(u64::from(limit.max_speed_qus_s).saturating_mul(1000), rate),
+            // a [qus/s²] / (rate_mhz / 1000)².
+            max_accel_qus: per_tick(
+                u64::from(limit.max_accel_qus_s2).saturating_mul(1_000_000),
+                rate.saturating_mul(rate),
+            ),
+        }
+    }
+
+    /// One tick from `pos` at `vel` (¼ µs per tick, signed) towards `target`
+    /// (clamped to the range first): the new position and velocity. Never
+    /// leaves `[min_qus, max_qus]` (even from outside it), never changes the
+    /// position by more than `max_step_qus` nor the velocity by more than
+    /// `max_accel_qus` — except to come back into the range — and brakes
+    /// early enough to stop on a target that holds still.
+    pub fn step(&self, pos: u16, vel: i32, target: u16) -> (u16, i32) {
+        let target = target.clamp(self.min_qus, self.max_qus);
+        if !(self.min_qus..=self.max_qus).contains(&pos) {
+            // Only before the first tick of a wrongly built stage: back
+            // inside at once, at rest.
+            return (pos.clamp(self.min_qus, self.max_qus), 0);
+        }
+        let d = i32::from(target).wrapping_sub(i32::from(pos));
+        let dist = d.unsigned_abs();
+        let mut speed = dist;
+        if self.max_step_qus > 0 {
+            speed = speed.min(u32::from(self.max_step_qus));
+        }
+        let a = u32::from(self.max_accel_qus);
+        let v = if a == 0 {
+            if d < 0 {
+                0i32.wrapping_sub(speed as i32)
+            } else {
+                speed as i32
+            }
+        } else {
+            // The fastest speed that still stops within `dist` braking by
+            // `a` per tick ([`brake_speed`]), kept against the target and
+            // against both range ends, so the servo never has to stop harder
+            // than `a`, even when the target jumps behind it.
+            let a64 = i64::from(a);
+            let brake = |dist: i64| brake_speed(a64, dist);
+            let speed = i64::from(speed).min(brake(i64::from(dist)));
+            let want = if d < 0 {
+                0i64.saturating_sub(speed)
+            } else {
+                speed
+            };
+            let v0 = i64::from(vel);
+            let (mut lo, mut hi) = (v0.saturating_sub(a64), v0.saturating_add(a64));
+            if self.max_step_qus > 0 {
+                let m = i64::from(self.max_step_qus);
+                (lo, hi) = (lo.max(0i64.saturating_sub(m)), hi.min(m));
+            }
+            let p = i64::from(pos);
+            lo = lo.max(0i64.saturating_sub(brake(p.saturating_sub(i64::from(self.min_qus)))));
+            hi = hi.min(brake(i64::from(self.max_qus).saturating_sub(p)));
+            let v = if lo <= hi { want.clamp(lo, hi) } else { 0 };
+            i32::try_from(v).unwrap_or(0)
+        };
+        let next = i32::from(pos)
+            .saturating_add(v)
+            .clamp(i32::from(self.min_qus), i32::from(self.max_qus));
+        let next = u16::try_from(next).unwrap_or(self.neutral_qus);
+        // The velocity actually moved (a range end stops it).
+        let moved = i32::from(next).wrapping_sub(i32::from(pos));
+        (next, moved)
+    }
+}
+
+/// The largest speed `s` (¼ µs per tick) that stops within `dist` when it
+/// can drop by at most `a > 0` per tick: the ticks `s, s − a, s − 2a, …`
+/// (while positive) add up to at most `dist`. With `k` further ticks (`k·a
+/// < s <= (k+1)·a`) they add up to `(k+1)·s − a·k(k+1)/2`. 0 for `dist <= 0`.
+fn brake_speed(a: i64, dist: i64) -> i64 {
+    if dist <= 0 || a <= 0 {
+        return 0;
+    }
+    // The continuous bound s(s + a) <= 2·a·dist is never below the answer.
+    let root = a
+        .saturating_mul(8)
+        .saturating_mul(dist)
+        .saturating_add(a.saturating_mul(a))
+        .unsigned_abs()
+        .isqrt();
+    let upper = i64::try_from(root).unwrap_or(i64::MAX).saturating_sub(a) / 2;
+    let mut k = upper.checked_div(a).unwrap_or(0).saturating_add(1);
+    loop {
+        let k1 = k.saturating_add(1);
+        let tri = a.saturating_mul(k).saturating_mul(k1) / 2;
+        let fit = dist.saturating_add(tri).checked_div(k1).unwrap_or(0);
+        let s = k1.saturating_mul(a).min(fit).min(dist);
+        if s > k.saturating_mul(a) || k == 0 {
+            return s.max(0);
+        }
+        k = k.wrapping_sub(1);
+    }
+}
+
+/// The hard-limit stage of `N` servos: the last pulse and velocity of each,
+/// every pulse through [`HardStep::step`]. Starts at rest at each servo's
+/// neutral. Counts, per servo, the ticks whose pulse it changed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HardStage<const N: usize> {
+    steps: [HardStep; N],
+    pos: [u16; N],
+    vel: [i32; N],
+    clamped: [u32; N],
+}
+
+impl<const N: usize> HardStage<N> {
+    /// A stage that passes every pulse through unchanged.
+    pub fn open() -> Self {
+        Self::new([HardStep::OPEN; N])
+    }
+
+    /// A stage for `steps`, at rest at their neutrals.
+    pub fn new(steps: [HardStep; N]) -> Self {
+        let mut pos = [0u16; N];
+        for (p, s) in pos.iter_mut().zip(&steps) {
+            *p = s.neutral_qus;
+        }
+        HardStage {
+            steps,
+            pos,
+            vel: [0; N],
+            clamped: [0; N],
+        }
+    }
+
+    /// Each servo's limits per tick.
+    pub const fn steps(&self) -> &[HardStep; N] {
+        &self.steps
+    }
+
+    /// Sets each servo's position (at rest) without counting a change: the
+    /// pulse the clip's own stage starts from, so a pass-through stage
+    /// does not move on its first tick.
+    pub fn start_at(&mut self, pulses: &[u16; N]) {
+        for ((p, v), (&q, s)) in self
+            .pos
+            .iter_mut()
+            .zip(&mut self.vel)
+            .zip(pulses.iter().zip(&self.steps))
+        {
+            *p = q.clamp(s.min_qus, s.max_qus);
+            *v = 0;
+        }
+    }
+
+    /// Moves each servo one tick towards `pulses`; writes the result back
+    /// into `pulses`.
+    pub fn apply(&mut self, pulses: &mut [u16; N]) {
+        for ((((q, p), v), s), c) in pulses
+            .iter_mut()
+            .zip(&mut self.pos)
+            .zip(&mut self.vel)
+            .zip(&self.steps)
+            .zip(&mut self.clamped)
+        {
+            let (next, vel) = s.step(*p, *v, *q);
+            if next != *q {
+                *c = c.saturating_add(1);
+            }
+            (*p, *v, *q) = (next, vel, next);
+        }
+    }
+
+    /// Moves each servo one tick towards its neutral; writes the pulses
+    /// into `pulses`; `true` once every servo is at neutral and at rest.
+    pub fn stop_step(&mut self, pulses: &mut [u16; N]) -> bool {
+        let mut parked = true;
+        for (((q, p), v), s) in pulses
+            .iter_mut()
+            .zip(&mut self.pos)
+            .zip(&mut self.vel)
+            .zip(&self.steps)
+        {
+            let (next, vel) = s.step(*p, *v, s.neutral_qus);
+            (*p, *v, *q) = (next, vel, next);
+            parked &= next == s.neutral_qus && vel == 0;
+        }
+        parked
+    }
+
+    /// Whether every servo is at its neutral, at rest.
+    pub fn parked(&self) -> bool {
+        self.pos
+            .iter()
+            .zip(&self.vel)
+            .zip(&self.steps)
+            .all(|((&p, &v), s)| p == s.neutral_qus && v == 0)
+    }
+
+    /// Per servo, the ticks whose pulse this stage changed.
+    pub const fn clamped(&self) -> &[u32; N] {
+        &self.clamped
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::TestRng;
+
+    fn limit(min: u16, max: u16, speed: u32, accel: u32) -> HardLimit {
+        HardLimit {
+            output: 0,
+            min_qus: min,
+            max_qus: max,
+            neutral_qus: min + (max - min) / 2,
+            max_speed_qus_s: speed,
+            max_accel_qus_s2: accel,
+        }
+    }
+
+    #[test]
+    fn brake_speed_is_the_largest_that_stops() {
+        let stops = |a: i64, s: i64, d: i64| {
+            let (mut s, mut sum) = (s, 0);
+            while s > 0 {
+                sum += s;
+                s -= a;
+            }
+            sum <= d
+        };
+        for a in 1..40 {
+            for d in 0..400 {
+                let s = brake_speed(a, d);
+                assert!(stops(a, s, d) && !stops(a, s + 1, d), "a={a} d={d} s={s}");
+            }
+        }
+    }
+
+    #[test]
+    fn per_tick_conversion() {
+        // 50 Hz: 40 000 ¼µs/s is 800 per tick; 100 000 ¼µs/s² is 40 per tick².
+        let s = HardStep::at_rate(&limit(4000, 8000, 40_000, 100_000), 50_000);
+        assert_eq!((s.max_step_qus, s.max_accel_qus), (800, 40));
+        let s = HardStep::at_rate(&limit(4000, 8000, 1, 1), 50_000);
+        assert_eq!((s.max_step_qus, s.max_accel_qus), (1, 1));
+        let s = HardStep::at_rate(&limit(4000, 8000, 0, 0), 50_000);
+        assert_eq!((s.max_step_qus, s.max_accel_qus), (0, 0));
+    }
+
+    /// Whatever the targets: inside the range, within the speed and the
+    /// acceleration limits, and at a held target eventually, at rest.
+    #[test]
+    fn random_targets_stay_inside_every_limit() {
+        let mut rng = TestRng::new(7);
+        for _ in 0..200 {
+            let a = rng.next_u16();
+            let b = rng.next_u16();
+            let (min, max) = if a <= b { (a, b) } else { (b, a) };
+            let step = HardStep {
+                min_qus: min,
+                max_qus: max,
+                neutral_qus: min + (max - min) / 3,
+                max_step_qus: rng.next_u16() % 300,
+                max_accel_qus: rng.next_u16() % 40,
+            };
+            let (mut p, mut v) = (step.neutral_qus, 0i32);
+            for _ in 0..500 {
+                let (n, nv) = step.step(p, v, rng.next_u16());
+                assert!((min..=max).contains(&n));
+                let moved = i32::from(n) - i32::from(p);
+                assert_eq!(moved, nv);
+                if step.max_step_qus > 0 {
+                    assert!(moved.unsigned_abs() <= u32::from(step.max_step_qus));
+                }
+                if step.max_accel_qus > 0 {
+                    assert!(
+                        (nv - v).unsigned_abs() <= u32::from(step.max_accel_qus),
+                        "{step:?} p={p} v={v} -> {n} {nv}"
+                    );
+                }
+                (p, v) = (n, nv);
+            }
+            // A held target is reached and held, at rest.
+            let target = rng.next_u16();
+            for _ in 0..200_000 {
+                (p, v) = step.step(p, v, target);
+                if p == target.clamp(min, max) && v == 0 {
+                    break;
+                }
+            }
+            assert_eq!((p, v), (target.clamp(min, max), 0), "{step:?}");
+        }
+    }
+
+    #[test]
+    fn open_stage_passes_pulses_through() {
+        let mut stage = HardStage::<3>::open();
+        stage.start_at(&[100, 6000, 60_000]);
+        let mut q = [0, 16_000, 65_535];
+        stage.apply(&mut q);
+        assert_eq!(q, [0, 16_000, 65_535]);
+        assert_eq!(stage.clamped(), &[0, 0, 0]);
+    }
+
+    #[test]
+    fn fit_names_the_first_servo_outside() {
+        let servo = |output, lo, hi| RigServo {
+            output,
+            angle_lo_mdeg: -45_000,
+            angle_hi_mdeg: 45_000,
+            pulse_lo_qus: lo,
+            pulse_hi_qus: hi,
+            neutral_qus: 6000,
+            max_speed_mdeg_s: 0,
+        };
+        let hard = [
+            HardLimit {
+                output: 3,
+                ..limit(4000, 8000, 0, 0)
+            },
+            HardLimit {
+                output: 5,
+                ..limit(4400, 7600, 0, 0)
+            },
+        ];
+        let hard = HardLimits::new(&hard);
+        assert_eq!(hard.fit(&[servo(3, 4000, 8000)]), Fit::Inside);
+        assert_eq!(
+            hard.fit(&[servo(5, 8000, 4400)]),
+            Fit::Outside { output: 5 }
+        );
+        assert_eq!(
+            hard.fit(&[servo(3, 4000, 8000), servo(4, 5000, 7000)]),
+            Fit::UnknownOutput { output: 4 }
+        );
+    }
+}
