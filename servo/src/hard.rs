@@ -89,11 +89,15 @@ impl<'a> HardLimits<'a> {
         self.limits.iter().find(|l| l.output == output)
     }
 
-    /// Whether `servos` lie inside these limits.
+    /// Whether `servos` lie inside these limits. An output the figure does not have counts before a range that
+    /// leaves the limits.
     pub fn fit(&self, servos: &[RigServo]) -> Fit {
+        if let Some(s) = servos.iter().find(|s| self.get(s.output).is_none()) {
+            return Fit::UnknownOutput { output: s.output };
+        }
         for s in servos {
             let Some(h) = self.get(s.output) else {
-                return Fit::UnknownOutput { output: s.output };
+                continue;
             };
             let (lo, hi) = s.pulse_range_qus();
             if lo < h.min_qus || hi > h.max_qus || !(lo..=hi).contains(&s.neutral_qus) {
@@ -151,7 +155,7 @@ impl HardStep {
         HardStep {
             min_qus,
             max_qus,
-            neutral_qus: limit.neutral_qus.clamp(min_qus, max_qus),
+            neutral_qus: limit.neutral_qus.max(min_qus).min(max_qus),
             // v [qus/s] / (rate_mhz / 1000 [ticks/s]).
             max_step_qus: per_tick(u64::from(limit.max_speed_qus_s).saturating_mul(1000), rate),
             // a [qus/s²] / (rate_mhz / 1000)².
@@ -169,11 +173,11 @@ impl HardStep {
     /// `max_accel_qus` — except to come back into the range — and brakes
     /// early enough to stop on a target that holds still.
     pub fn step(&self, pos: u16, vel: i32, target: u16) -> (u16, i32) {
-        let target = target.clamp(self.min_qus, self.max_qus);
+        let target = target.max(self.min_qus).min(self.max_qus);
         if !(self.min_qus..=self.max_qus).contains(&pos) {
             // Only before the first tick of a wrongly built stage: back
             // inside at once, at rest.
-            return (pos.clamp(self.min_qus, self.max_qus), 0);
+            return (pos.max(self.min_qus).min(self.max_qus), 0);
         }
         let d = i32::from(target).wrapping_sub(i32::from(pos));
         let dist = d.unsigned_abs();
@@ -210,12 +214,13 @@ impl HardStep {
             let p = i64::from(pos);
             lo = lo.max(0i64.saturating_sub(brake(p.saturating_sub(i64::from(self.min_qus)))));
             hi = hi.min(brake(i64::from(self.max_qus).saturating_sub(p)));
-            let v = if lo <= hi { want.clamp(lo, hi) } else { 0 };
+            let v = if lo <= hi { want.max(lo).min(hi) } else { 0 };
             i32::try_from(v).unwrap_or(0)
         };
         let next = i32::from(pos)
             .saturating_add(v)
-            .clamp(i32::from(self.min_qus), i32::from(self.max_qus));
+            .max(i32::from(self.min_qus))
+            .min(i32::from(self.max_qus));
         let next = u16::try_from(next).unwrap_or(self.neutral_qus);
         // The velocity actually moved (a range end stops it).
         let moved = i32::from(next).wrapping_sub(i32::from(pos));
@@ -298,7 +303,7 @@ impl<const N: usize> HardStage<N> {
             .zip(&mut self.vel)
             .zip(pulses.iter().zip(&self.steps))
         {
-            *p = q.clamp(s.min_qus, s.max_qus);
+            *p = q.max(s.min_qus).min(s.max_qus);
             *v = 0;
         }
     }

@@ -15,6 +15,7 @@
 
 use mocap_decoder::{tick_count, tick_us, Rig, RigServo};
 
+use crate::hard::{Fit, HardLimits, HardStage, HardStep, Policy};
 use crate::{Error, Limiter, OutputError, ServoLimits, ServoOutput};
 
 /// Upper bound on the ticks of a return to neutral ([`Playback::park`]):
@@ -69,6 +70,9 @@ pub struct Playback<const N: usize> {
     count: usize,
     rate_mhz: u32,
     limiter: Limiter<N>,
+    /// The figure's hard limits after the clip's own (`None`: the clip's
+    /// limits are the only ones).
+    hard: Option<HardStage<N>>,
     held: [u16; N],
 }
 
@@ -109,8 +113,66 @@ impl<const N: usize> Playback<N> {
             count,
             rate_mhz,
             limiter,
+            hard: None,
             held,
         })
+    }
+
+    /// This playback with the figure's hard limits applied after the clip's
+    /// own to every pulse, and the return to rest going to the figure's
+    /// neutrals at its speed and acceleration. `matches_figure` says whether
+    /// the clip was made for this figure (its rig digest is the figure's);
+    /// when it is not, `policy` decides: [`Policy::Refuse`] refuses it,
+    /// [`Policy::ClampIfInside`] refuses it unless every servo lies inside
+    /// the hard limits ([`HardLimits::fit`]), [`Policy::ClampAlways`] plays
+    /// it. A servo on an output the figure does not have is always refused.
+    /// Returns the fit too (for a status message).
+    pub fn with_hard_limits(
+        mut self,
+        hard: &HardLimits<'_>,
+        matches_figure: bool,
+        policy: Policy,
+    ) -> Result<(Self, Fit), PlaybackError> {
+        let fit = hard.fit(self.servos());
+        if let Fit::UnknownOutput { output } = fit {
+            return Err(PlaybackError::UnknownOutput { output });
+        }
+        let allowed = matches_figure
+            || match policy {
+                Policy::Refuse => false,
+                Policy::ClampIfInside => fit == Fit::Inside,
+                Policy::ClampAlways => true,
+            };
+        if !allowed {
+            return Err(PlaybackError::NotThisFigure { fit });
+        }
+        let mut steps = [HardStep::OPEN; N];
+        for (step, servo) in steps.iter_mut().zip(self.servos()) {
+            if let Some(limit) = hard.get(servo.output) {
+                *step = HardStep::at_rate(limit, self.rate_mhz);
+            }
+        }
+        let mut stage = HardStage::new(steps);
+        // Both stages start where the figure rests: the clip's stage at its
+        // own neutrals (the pulses it was going to start from), the hard
+        // stage at the figure's.
+        let mut start = self.held;
+        for (q, s) in start.iter_mut().zip(&steps).take(self.count) {
+            *q = s.neutral_qus;
+        }
+        stage.start_at(&start);
+        self.held = start;
+        self.hard = Some(stage);
+        Ok((self, fit))
+    }
+
+    /// Per servo (rig order), the ticks whose pulse the figure's hard limits
+    /// changed; empty without hard limits.
+    pub fn hard_clamps(&self) -> &[u32] {
+        match &self.hard {
+            Some(h) => h.clamped().get(..self.count).unwrap_or_default(),
+            None => &[],
+        }
     }
 
     /// The rig table of a servo clip (SPEC.md §3.5): its servos and rate.
@@ -197,6 +259,9 @@ impl<const N: usize> Playback<N> {
     /// [`write`](Self::write) sends them. [`tick`](Self::tick) does both.
     pub fn limit(&mut self, targets: &[u16; N]) -> Result<&[u16], Error> {
         self.limiter.apply(targets, &mut self.held)?;
+        if let Some(hard) = &mut self.hard {
+            hard.apply(&mut self.held);
+        }
         Ok(self.held())
     }
 
@@ -221,7 +286,11 @@ impl<const N: usize> Playback<N> {
         &mut self,
         output: &mut O,
     ) -> Result<bool, OutputError<O::Error>> {
-        let parked = self.limiter.stop_step(&mut self.held)?;
+        let mut parked = self.limiter.stop_step(&mut self.held)?;
+        if let Some(hard) = &mut self.hard {
+            // The figure's neutrals, at the figure's speed and acceleration.
+            parked = hard.stop_step(&mut self.held);
+        }
         self.write(output)?;
         Ok(parked)
     }
@@ -229,6 +298,9 @@ impl<const N: usize> Playback<N> {
     /// Whether every servo was last commanded its neutral (true before the
     /// first tick).
     pub fn parked(&self) -> bool {
+        if let Some(hard) = &self.hard {
+            return hard.parked();
+        }
         self.limiter
             .limits()
             .iter()
@@ -277,6 +349,16 @@ pub enum PlaybackError {
         /// The most it holds.
         max: usize,
     },
+    /// A servo drives an output the figure's hard limits do not have.
+    UnknownOutput {
+        /// The servo's controller channel.
+        output: u16,
+    },
+    /// The clip was made for another figure, and the policy refuses it.
+    NotThisFigure {
+        /// How its servos lie against the figure's hard limits.
+        fit: Fit,
+    },
     /// A servo's limits are invalid.
     Limits {
         /// The servo's controller channel.
@@ -293,6 +375,16 @@ impl core::fmt::Display for PlaybackError {
                 write!(f, "{count} servos, at most {max}")
             }
             PlaybackError::Limits { output, error } => write!(f, "servo output {output}: {error}"),
+            PlaybackError::UnknownOutput { output } => {
+                write!(f, "servo output {output}: the figure has no such output")
+            }
+            PlaybackError::NotThisFigure { fit } => match fit {
+                Fit::Outside { output } => write!(
+                    f,
+                    "clip made for another rig, and servo output {output} leaves the figure's hard limits"
+                ),
+                _ => write!(f, "clip made for another rig (refused by the figure's policy)"),
+            },
         }
     }
 }
@@ -378,5 +470,97 @@ mod tests {
             Playback::<2>::new([bad], 50_000),
             Err(PlaybackError::Limits { output: 3, .. })
         ));
+    }
+
+    /// The figure: outputs 0 and 1 at 1100–1900 µs, neutral 1400 µs, 100 µs
+    /// per tick at 50 Hz (20 000 ¼µs/s), 20 ¼µs per tick² (50 000 ¼µs/s²).
+    const FIGURE: [crate::HardLimit; 2] = [
+        crate::HardLimit {
+            output: 0,
+            min_qus: 4400,
+            max_qus: 7600,
+            neutral_qus: 5600,
+            max_speed_qus_s: 20_000,
+            max_accel_qus_s2: 50_000,
+        },
+        crate::HardLimit {
+            output: 1,
+            min_qus: 4400,
+            max_qus: 7600,
+            neutral_qus: 5600,
+            max_speed_qus_s: 20_000,
+            max_accel_qus_s2: 50_000,
+        },
+    ];
+
+    #[test]
+    fn a_wider_rig_is_held_to_the_figure_and_parks_at_its_neutral() {
+        let hard = HardLimits::new(&FIGURE);
+        // The clip's rig: 1000–2000 µs, no speed limit — wider than the figure.
+        let wide = || Playback::<4>::new([servo(0, 0), servo(1, 0)], 50_000).unwrap();
+        assert_eq!(
+            wide().with_hard_limits(&hard, false, Policy::Refuse).err(),
+            Some(PlaybackError::NotThisFigure {
+                fit: Fit::Outside { output: 0 }
+            })
+        );
+        assert!(wide()
+            .with_hard_limits(&hard, false, Policy::ClampIfInside)
+            .is_err());
+        let (mut p, fit) = wide()
+            .with_hard_limits(&hard, false, Policy::ClampAlways)
+            .unwrap();
+        assert_eq!(fit, Fit::Outside { output: 0 });
+        assert_eq!(p.held(), &[5600, 5600]);
+        let mut bytes = std::vec::Vec::new();
+        let outputs = p.outputs();
+        let mut out = MaestroOutput::new(&mut bytes, &outputs[..2]).unwrap();
+        let mut last = [5600i32, 5600];
+        let mut vel = [0i32; 2];
+        let mut check = |pulses: &[u16]| {
+            for ((&q, l), v) in pulses.iter().zip(&mut last).zip(&mut vel) {
+                assert!((4400..=7600).contains(&q), "{q}");
+                let nv = i32::from(q) - *l;
+                assert!(nv.abs() <= 400 && (nv - *v).abs() <= 20, "{nv} {v}");
+                (*l, *v) = (i32::from(q), nv);
+            }
+        };
+        for i in 0..400 {
+            let a = if (i / 37) % 2 == 0 { 90_000 } else { -90_000 };
+            let targets = p.targets(&[a, -a]);
+            p.tick(&targets, &mut out).unwrap();
+            check(p.held());
+        }
+        assert!(p.hard_clamps().iter().all(|&c| c > 0));
+        p.park(&mut out, |pulses| {
+            check(pulses);
+            Ok::<_, OutputError<_>>(())
+        })
+        .unwrap();
+        assert_eq!(p.held(), &[5600, 5600]);
+        assert!(p.parked());
+        // An output the figure does not have is refused whatever the policy.
+        let other = Playback::<4>::new([servo(0, 0), servo(7, 0)], 50_000).unwrap();
+        assert_eq!(
+            other
+                .with_hard_limits(&hard, true, Policy::ClampAlways)
+                .err(),
+            Some(PlaybackError::UnknownOutput { output: 7 })
+        );
+    }
+
+    #[test]
+    fn a_rig_inside_the_figure_plays_unchanged_under_clamp_if_inside() {
+        let hard = HardLimits::new(&FIGURE);
+        let narrow = RigServo {
+            pulse_lo_qus: 5000,
+            pulse_hi_qus: 7000,
+            ..servo(0, 0)
+        };
+        let (p, fit) = Playback::<2>::new([narrow], 50_000)
+            .unwrap()
+            .with_hard_limits(&hard, false, Policy::ClampIfInside)
+            .unwrap();
+        assert_eq!((fit, p.count()), (Fit::Inside, 1));
     }
 }
