@@ -103,3 +103,113 @@ fn errors_read_as_before() {
         "mocap: error: a servo clip's bound is in degrees of servo travel (e.g. --max-error 0.5deg)\n"
     );
 }
+
+/// `mocap play SERVO_CLIP --rig FIGURE`: the figure's hard limits. A clip
+/// for the figure's own rig plays and says so; `--policy` without `--rig` is
+/// a usage error; a clip for another rig that leaves the limits is refused
+/// (exit 1, the reason on stderr) unless `--policy clamp`, which reports
+/// every servo it clamped.
+#[test]
+fn play_holds_a_servo_clip_to_the_figure() {
+    let d = out_dir("figure");
+    let path = |n: &str| d.join(n).to_str().expect("utf-8 path").to_owned();
+    let rig = "assets/rigs/animatronic_demo.toml";
+    let own = path("own.mcb");
+    let o = mocap(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "--rig",
+        rig,
+        "--max-error",
+        "0.5deg",
+        "-o",
+        &own,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = path("own.bin");
+    let o = mocap(&[
+        "play",
+        &own,
+        "--rig",
+        rig,
+        "--protocol",
+        "maestro",
+        "--fast",
+        "--output",
+        &out,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("figure: the clip was made for this rig"));
+
+    let o = mocap(&[
+        "play",
+        &own,
+        "--policy",
+        "clamp",
+        "--protocol",
+        "maestro",
+        "--output",
+        &out,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+
+    // The figure's rig with output 0 widened to 500–2500 µs: a bigger sibling.
+    let toml = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../assets/rigs/animatronic_demo.toml"
+    ))
+    .expect("rig");
+    let wide_toml = toml.replacen("pulse = [1000, 2000]", "pulse = [500, 2500]", 1);
+    assert_ne!(wide_toml, toml);
+    let wide_rig = path("wide.toml");
+    std::fs::write(&wide_rig, wide_toml).expect("write rig");
+    let wide = path("wide.mcb");
+    let o = mocap(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "--rig",
+        &wide_rig,
+        "--max-error",
+        "0.5deg",
+        "-o",
+        &wide,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let o = mocap(&[
+        "play",
+        &wide,
+        "--rig",
+        rig,
+        "--protocol",
+        "maestro",
+        "--fast",
+        "--output",
+        &out,
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("servo output 0 leaves the figure's hard limits"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = mocap(&[
+        "play",
+        &wide,
+        "--rig",
+        rig,
+        "--policy",
+        "clamp",
+        "--protocol",
+        "maestro",
+        "--fast",
+        "--output",
+        &out,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(err.contains("played clamped"), "{err}");
+    assert!(
+        err.contains("hard limits changed pulses of output"),
+        "{err}"
+    );
+}

@@ -7,7 +7,12 @@
 use mocap_decoder::{tick_count, tick_us, Clip, RigServo};
 use mocap_servo::output::{MaestroOutput, ServoOutput, Ssc32Output};
 use mocap_servo::record::{RecordError, SerialRecorder};
-use mocap_servo::{ssc32, stream, Message, OutputError, Playback, PlaybackError, ServoLimits};
+use mocap_servo::{
+    ssc32, stream, HardLimit, HardLimits, Message, OutputError, Playback, PlaybackError,
+    ServoLimits,
+};
+
+pub use mocap_servo::{Fit, Policy};
 
 use crate::rig::{Rig, RigError, Servo, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
@@ -106,6 +111,57 @@ pub struct ServoStream {
     pub tracks: Option<ServoTracks>,
     /// The limits every pulse was held to, rig order.
     pub limits: Vec<ServoLimits>,
+    /// Played on a figure's hard limits ([`servo_clip_stream_on`]): how.
+    pub figure: Option<FigureReport>,
+}
+
+/// A figure's hard limits as `mocap play --rig` applies them to a servo
+/// clip: the figure's rig, and what to do with a clip made for another.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// The figure's servos as a rig table holds them: a clip whose rig
+    /// table is exactly this was made for this figure.
+    pub servos: Vec<RigServo>,
+    /// The figure's rate, millihertz (part of its identity).
+    pub rate_mhz: u32,
+    /// Its hard limits, one per output.
+    pub limits: Vec<HardLimit>,
+    /// What to do with a clip made for another rig.
+    pub policy: Policy,
+}
+
+impl Figure {
+    /// The figure of a rig file.
+    pub fn from_rig(rig: &Rig, policy: Policy) -> Self {
+        Figure {
+            servos: rig.servos.iter().map(Servo::rig_servo).collect(),
+            rate_mhz: servo_clip::rate_mhz(rig),
+            limits: rig.hard_limits(),
+            policy,
+        }
+    }
+}
+
+/// How a servo clip played on a figure's hard limits.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FigureReport {
+    /// The clip's rig table is the figure's own.
+    pub same_rig: bool,
+    /// How the clip's servos lie against the hard limits.
+    pub fit: Fit,
+    /// Per servo, rig order.
+    pub clamps: Vec<HardClamps>,
+}
+
+/// What a figure's hard limits did to one servo's pulses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HardClamps {
+    /// The servo's output.
+    pub output: u16,
+    /// Ticks whose pulse the hard limits changed.
+    pub ticks: u32,
+    /// The most they moved a pulse, ¼ µs.
+    pub worst_qus: u16,
 }
 
 impl ServoStream {
@@ -181,7 +237,25 @@ pub fn servo_clip_stream(
     rate_hz: Option<f64>,
 ) -> Result<ServoStream, PlayError> {
     let t = servo_clip_targets(clip, rate_hz)?;
-    drive(t.targets, &t.servos, t.rate_mhz, protocol, None)
+    drive(t.targets, &t.servos, t.rate_mhz, protocol, None, None)
+}
+
+/// [`servo_clip_stream`] on a figure's hard limits: every pulse through the
+/// clip's own limits, then the figure's (`Playback::with_hard_limits`), the
+/// return to rest at the figure's neutrals and speeds. A clip made for
+/// another rig plays or is refused ([`PlayError::Playback`]) by the
+/// figure's policy.
+pub fn servo_clip_stream_on(
+    clip: &Clip<'_>,
+    figure: &Figure,
+    protocol: Protocol,
+    rate_hz: Option<f64>,
+) -> Result<ServoStream, PlayError> {
+    let t = servo_clip_targets(clip, rate_hz)?;
+    let table_rate = clip.rig().map(|r| r.rate_mhz());
+    let same_rig = figure.servos == t.servos && table_rate == Some(figure.rate_mhz);
+    let on = (figure, same_rig);
+    drive(t.targets, &t.servos, t.rate_mhz, protocol, None, Some(on))
 }
 
 /// Samples a motion clip at the rig's rate (or `rate_hz`), maps it through
@@ -206,7 +280,7 @@ pub fn servo_stream(
     let targets: Vec<Vec<u16>> = (0..count)
         .map(|i| tracks.servos.iter().map(|t| t.pulses[i]).collect())
         .collect();
-    drive(targets, &servos, rate_mhz, protocol, Some(tracks))
+    drive(targets, &servos, rate_mhz, protocol, Some(tracks), None)
 }
 
 /// Plays every tick's targets on `mocap_servo::Playback`, the firmware's
@@ -222,8 +296,20 @@ fn drive(
     rate_mhz: u32,
     protocol: Protocol,
     tracks: Option<ServoTracks>,
+    figure: Option<(&Figure, bool)>,
 ) -> Result<ServoStream, PlayError> {
     let mut playback = Playback::<MAX_SERVOS>::new(servos.iter().copied(), rate_mhz)?;
+    let mut report = None;
+    if let Some((f, same_rig)) = figure {
+        let hard = HardLimits::new(&f.limits);
+        let (p, fit) = playback.with_hard_limits(&hard, same_rig, f.policy)?;
+        playback = p;
+        report = Some(FigureReport {
+            same_rig,
+            fit,
+            clamps: Vec::new(),
+        });
+    }
     let limits = playback.limits().to_vec();
     let rate_hz = f64::from(rate_mhz) / 1000.0;
     let time_ms = (1000.0 / rate_hz).round().clamp(1.0, f64::from(u16::MAX)) as u16;
@@ -240,6 +326,17 @@ fn drive(
             play(&mut playback, output, &port, targets)?
         }
     };
+    if let Some(r) = &mut report {
+        r.clamps = servos
+            .iter()
+            .zip(playback.hard_clamps().iter().zip(playback.hard_worst()))
+            .map(|(s, (&ticks, &worst_qus))| HardClamps {
+                output: s.output,
+                ticks,
+                worst_qus,
+            })
+            .collect();
+    }
     Ok(ServoStream {
         rate_hz,
         ticks,
@@ -247,6 +344,7 @@ fn drive(
         clip_ticks,
         tracks,
         limits,
+        figure: report,
     })
 }
 

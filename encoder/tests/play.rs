@@ -564,3 +564,101 @@ fn error_messages_name_what_is_wrong() {
         message(&servo_clip::attach_rig(b"not a clip", &rig, ServoNames::Strip).unwrap_err());
     assert!(garbage.starts_with("internal error: "), "{garbage}");
 }
+
+/// The demo rig with every range widened (angle and pulse ×1.8 about their
+/// middles, pulses kept in 400–2600 µs) and no speed or acceleration limit:
+/// a clip made for a bigger sibling figure.
+fn widened(rig: &Rig) -> Rig {
+    let mut wide = rig.clone();
+    let stretch = |[a, b]: [f64; 2]| {
+        let (c, h) = ((a + b) / 2.0, (b - a) / 2.0 * 1.8);
+        [c - h, c + h]
+    };
+    for s in &mut wide.servos {
+        s.angle = stretch(s.angle);
+        s.pulse = stretch(s.pulse).map(|p| p.clamp(400.0, 2600.0));
+        (s.max_speed, s.max_accel) = (None, None);
+    }
+    wide
+}
+
+/// A clip for a wider rig played on the demo figure (`mocap play --rig`):
+/// refused under `refuse` and `clamp-if-inside`; under `clamp`, every pulse
+/// inside the figure's pulse ranges, within its speed and acceleration at
+/// the tick rate, back at its neutrals at the end. The figure's own clip
+/// plays whatever the policy.
+#[test]
+fn a_clip_for_a_wider_rig_stays_inside_the_figures_hard_limits() {
+    use mocap_encoder::play::{servo_clip_stream_on, Figure, Fit, Policy};
+    use mocap_servo::HardStep;
+    let (figure_rig, tracks) = demo_tracks();
+    let wide = widened(&figure_rig);
+    let wide_tracks = {
+        let m = bvh::read_file(&root().join("assets/animatronic_demo.bvh")).unwrap();
+        let channels = wide.resolve(&m.skeleton).unwrap();
+        wide.servo_tracks(&m, &channels, 0.01)
+    };
+    let options = servo_options(CodecChoice::Index, 0.5, ServoRate::Rig, ServoNames::Keep);
+    let wide_clip = servo_clip::encode_servo_clip(&wide, &wide_tracks, &options).unwrap();
+    let own_clip = servo_clip::encode_servo_clip(&figure_rig, &tracks, &options).unwrap();
+    let wide_clip = Clip::parse(&wide_clip.bytes).unwrap();
+    let own_clip = Clip::parse(&own_clip.bytes).unwrap();
+
+    for policy in [Policy::Refuse, Policy::ClampIfInside] {
+        let figure = Figure::from_rig(&figure_rig, policy);
+        let e = servo_clip_stream_on(&wide_clip, &figure, Protocol::Maestro, None).unwrap_err();
+        assert!(
+            e.to_string().contains("leaves the figure's hard limits"),
+            "{e}"
+        );
+        let own = servo_clip_stream_on(&own_clip, &figure, Protocol::Maestro, None).unwrap();
+        assert!(own.figure.as_ref().unwrap().same_rig);
+    }
+
+    let figure = Figure::from_rig(&figure_rig, Policy::ClampAlways);
+    let s = servo_clip_stream_on(&wide_clip, &figure, Protocol::Maestro, None).unwrap();
+    let report = s.figure.as_ref().unwrap();
+    assert!(!report.same_rig);
+    assert!(matches!(report.fit, Fit::Outside { .. }));
+    assert!(report.clamps.iter().any(|c| c.ticks > 0));
+    let steps: Vec<HardStep> = figure
+        .limits
+        .iter()
+        .map(|l| HardStep::at_rate(l, figure.rate_mhz))
+        .collect();
+    // The bytes say the same as the pulses.
+    let commands = maestro_commands(&s.bytes());
+    assert_eq!(commands.len(), s.pulses.len() * steps.len());
+    let mut outside = 0;
+    let mut prev: Vec<(i32, i32)> = steps
+        .iter()
+        .map(|h| (i32::from(h.neutral_qus), 0))
+        .collect();
+    for (i, pulses) in s.pulses.iter().enumerate() {
+        for (j, (&p, h)) in pulses.iter().zip(&steps).enumerate() {
+            assert_eq!(commands[i * steps.len() + j].1, p);
+            outside += usize::from(!(h.min_qus..=h.max_qus).contains(&p));
+            let (last, v) = prev[j];
+            let nv = i32::from(p) - last;
+            if h.max_step_qus > 0 {
+                assert!(
+                    nv.unsigned_abs() <= u32::from(h.max_step_qus),
+                    "tick {i} servo {j}"
+                );
+            }
+            if h.max_accel_qus > 0 {
+                let dv = (nv - v).unsigned_abs();
+                assert!(
+                    dv <= u32::from(h.max_accel_qus),
+                    "tick {i} servo {j}: Δv {dv}"
+                );
+            }
+            prev[j] = (i32::from(p), nv);
+        }
+    }
+    assert_eq!(outside, 0, "commands outside the figure's hard limits");
+    let last = s.pulses.last().unwrap();
+    for (&p, h) in last.iter().zip(&steps) {
+        assert_eq!(p, h.neutral_qus);
+    }
+}

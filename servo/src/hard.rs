@@ -266,6 +266,7 @@ pub struct HardStage<const N: usize> {
     pos: [u16; N],
     vel: [i32; N],
     clamped: [u32; N],
+    worst: [u16; N],
 }
 
 impl<const N: usize> HardStage<N> {
@@ -285,6 +286,7 @@ impl<const N: usize> HardStage<N> {
             pos,
             vel: [0; N],
             clamped: [0; N],
+            worst: [0; N],
         }
     }
 
@@ -311,16 +313,18 @@ impl<const N: usize> HardStage<N> {
     /// Moves each servo one tick towards `pulses`; writes the result back
     /// into `pulses`.
     pub fn apply(&mut self, pulses: &mut [u16; N]) {
-        for ((((q, p), v), s), c) in pulses
+        for (((((q, p), v), s), c), w) in pulses
             .iter_mut()
             .zip(&mut self.pos)
             .zip(&mut self.vel)
             .zip(&self.steps)
             .zip(&mut self.clamped)
+            .zip(&mut self.worst)
         {
             let (next, vel) = s.step(*p, *v, *q);
             if next != *q {
                 *c = c.saturating_add(1);
+                *w = (*w).max(next.abs_diff(*q));
             }
             (*p, *v, *q) = (next, vel, next);
         }
@@ -355,6 +359,12 @@ impl<const N: usize> HardStage<N> {
     /// Per servo, the ticks whose pulse this stage changed.
     pub const fn clamped(&self) -> &[u32; N] {
         &self.clamped
+    }
+
+    /// Per servo, the most this stage moved a pulse from the one it was
+    /// given, ¼ µs.
+    pub const fn worst(&self) -> &[u16; N] {
+        &self.worst
     }
 }
 

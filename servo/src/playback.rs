@@ -175,6 +175,15 @@ impl<const N: usize> Playback<N> {
         }
     }
 
+    /// Per servo (rig order), the most the figure's hard limits moved a
+    /// pulse, ¼ µs; empty without hard limits.
+    pub fn hard_worst(&self) -> &[u16] {
+        match &self.hard {
+            Some(h) => h.worst().get(..self.count).unwrap_or_default(),
+            None => &[],
+        }
+    }
+
     /// The rig table of a servo clip (SPEC.md §3.5): its servos and rate.
     pub fn from_rig(rig: &Rig<'_>) -> Result<Self, PlaybackError> {
         if rig.servo_count() > N {

@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-use mocap_encoder::play::{self, Protocol};
+use mocap_encoder::play::{self, Figure, FigureReport, Fit, Policy, Protocol};
+
 use mocap_encoder::rig::Rig;
 
 use super::{parse_clip, read_clip, Destination};
@@ -12,10 +13,19 @@ use super::{parse_clip, read_clip, Destination};
 pub struct Args {
     /// Input .mcb clip.
     clip: PathBuf,
-    /// Rig file (TOML, see assets/rigs/README.md); not needed for a
-    /// servo clip (`encode --rig`), which carries its rig table.
+    /// Rig file (TOML, see assets/rigs/README.md). For a motion clip: the
+    /// rig that maps it to servos. For a servo clip (`encode --rig`, which
+    /// carries its own rig table): the figure's hard limits — every pulse
+    /// also held to this rig's pulse ranges, speeds and accelerations, the
+    /// return to rest at its neutrals, every clamp reported.
     #[arg(long)]
     rig: Option<PathBuf>,
+    /// With --rig on a servo clip made for another rig: `refuse` it,
+    /// play it clamped only if its every servo lies inside the figure's
+    /// limits (`clamp-if-inside`, the firmware's default), or play it
+    /// clamped whatever its rig says (`clamp`).
+    #[arg(long, value_enum, default_value = "clamp-if-inside", requires = "rig")]
+    policy: PolicyArg,
     /// Servo controller protocol.
     #[arg(long, value_enum)]
     protocol: ProtocolArg,
@@ -24,6 +34,17 @@ pub struct Args {
     /// Servo ticks per second (default: the rig's rate_hz).
     #[arg(long)]
     rate: Option<f64>,
+}
+
+/// `--policy`: `mocap_servo::Policy` as a command-line value.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum PolicyArg {
+    /// Refuse a clip made for another rig.
+    Refuse,
+    /// Play it clamped if its every servo lies inside the hard limits.
+    ClampIfInside,
+    /// Play it clamped whatever its rig says.
+    Clamp,
 }
 
 /// `--protocol`: [`Protocol`] as a command-line value.
@@ -43,7 +64,16 @@ pub fn run(a: Args) -> super::Result {
     };
     let bytes = read_clip(&a.clip)?;
     let c = parse_clip(&a.clip, &bytes)?;
+    let policy = match a.policy {
+        PolicyArg::Refuse => Policy::Refuse,
+        PolicyArg::ClampIfInside => Policy::ClampIfInside,
+        PolicyArg::Clamp => Policy::ClampAlways,
+    };
     let s = match &a.rig {
+        Some(rig) if c.rig().is_some() => {
+            let figure = Figure::from_rig(&Rig::read_file(rig)?, policy);
+            play::servo_clip_stream_on(&c, &figure, protocol, a.rate)?
+        }
         Some(rig) => {
             let rig = Rig::read_file(rig)?;
             play::servo_stream(&c, &rig, protocol, a.rate)?
@@ -52,6 +82,9 @@ pub fn run(a: Args) -> super::Result {
     };
     if let Some(t) = &s.tracks {
         eprint!("{t}");
+    }
+    if let Some(f) = &s.figure {
+        eprint!("{}", figure_text(f));
     }
     let rate = s.rate_hz;
     let period = std::time::Duration::from_secs_f64(1.0 / rate);
@@ -65,4 +98,41 @@ pub fn run(a: Args) -> super::Result {
         s.ticks.iter().map(Vec::len).sum::<usize>()
     );
     Ok(())
+}
+
+/// What the figure's hard limits did, for stderr.
+fn figure_text(f: &FigureReport) -> String {
+    let mut t = String::from("figure: ");
+    t += match (f.same_rig, f.fit) {
+        (true, _) => "the clip was made for this rig",
+        (false, Fit::Inside) => {
+            "the clip was made for another rig, every servo inside the hard limits"
+        }
+        (false, _) => {
+            "the clip was made for another rig, which leaves the hard limits: played clamped"
+        }
+    };
+    t.push('\n');
+    let clamped: Vec<String> = f
+        .clamps
+        .iter()
+        .filter(|c| c.ticks > 0)
+        .map(|c| {
+            format!(
+                "output {}: {} ticks, at most {} µs",
+                c.output,
+                c.ticks,
+                f64::from(c.worst_qus) / 4.0
+            )
+        })
+        .collect();
+    if clamped.is_empty() {
+        t += "figure: no pulse changed by the hard limits\n";
+    } else {
+        t += &format!(
+            "figure: hard limits changed pulses of {}\n",
+            clamped.join("; ")
+        );
+    }
+    t
 }

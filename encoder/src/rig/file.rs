@@ -111,6 +111,12 @@ fn parse_kind(s: &str) -> Option<ChannelKind> {
 }
 
 impl Rig {
+    /// The rig as a figure's hard limits: [`Servo::hard_limit`] of each
+    /// servo, rig order.
+    pub fn hard_limits(&self) -> Vec<mocap_servo::HardLimit> {
+        self.servos.iter().map(Servo::hard_limit).collect()
+    }
+
     /// Reads and parses a rig file. I/O errors have line and column 0.
     pub fn read_file(path: &Path) -> Result<Rig, RigError> {
         let file = path.display().to_string();

@@ -77,6 +77,7 @@ pub use shape::{MAX_ROTATION_DEG, REWRAP_HYSTERESIS_DEG};
 
 use crate::motion::ChannelKind;
 use mocap_decoder::RigServo;
+use mocap_servo::HardLimit;
 
 /// Servo update rate when `[rig] rate_hz` is not given.
 pub const DEFAULT_RATE_HZ: f64 = 50.0;
@@ -230,6 +231,31 @@ impl Servo {
             max_speed_mdeg_s: self.max_speed.map_or(0, |v| {
                 (v * 1000.0).round().clamp(1.0, f64::from(u32::MAX)) as u32
             }),
+        }
+    }
+
+    /// This servo as a figure's hard limit (`mocap_servo::HardLimit`): its
+    /// pulse range and neutral in quarter-microseconds, its `max_speed` and
+    /// `max_accel` (degrees of travel) as quarter-microseconds of pulse per
+    /// second and per second² through its pulse-per-degree slope (rounded
+    /// down, at least 1 when set). The one conversion the firmware's
+    /// build-time table and `mocap play --rig` share.
+    pub fn hard_limit(&self) -> HardLimit {
+        let s = self.rig_servo();
+        let (min_qus, max_qus) = s.pulse_range_qus();
+        let qus_per_deg = 1.0 / self.degrees_per_us() * QUARTER_US_PER_US;
+        let rate = |v: Option<f64>| {
+            v.map_or(0, |v| {
+                (v * qus_per_deg).floor().clamp(1.0, f64::from(u32::MAX)) as u32
+            })
+        };
+        HardLimit {
+            output: self.output,
+            min_qus,
+            max_qus,
+            neutral_qus: s.neutral_qus,
+            max_speed_qus_s: rate(self.max_speed),
+            max_accel_qus_s2: rate(self.max_accel),
         }
     }
 
