@@ -114,43 +114,31 @@ fn play_holds_a_servo_clip_to_the_figure() {
     let d = out_dir("figure");
     let path = |n: &str| d.join(n).to_str().expect("utf-8 path").to_owned();
     let rig = "assets/rigs/animatronic_demo.toml";
+    let encode_for = |rig: &str, clip: &str| {
+        let args = ["encode", "assets/animatronic_demo.bvh", "--rig", rig];
+        let o = mocap(&[&args[..], &["--max-error", "0.5deg", "-o", clip]].concat());
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    };
+    let out = path("out.bin");
+    let play = |clip: &str, extra: &[&str]| {
+        let args = [
+            "play",
+            clip,
+            "--protocol",
+            "maestro",
+            "--fast",
+            "--output",
+            &out,
+        ];
+        mocap(&[&args[..], extra].concat())
+    };
     let own = path("own.mcb");
-    let o = mocap(&[
-        "encode",
-        "assets/animatronic_demo.bvh",
-        "--rig",
-        rig,
-        "--max-error",
-        "0.5deg",
-        "-o",
-        &own,
-    ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    let out = path("own.bin");
-    let o = mocap(&[
-        "play",
-        &own,
-        "--rig",
-        rig,
-        "--protocol",
-        "maestro",
-        "--fast",
-        "--output",
-        &out,
-    ]);
+    encode_for(rig, &own);
+    let o = play(&own, &["--rig", rig]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("figure: the clip was made for this rig"));
 
-    let o = mocap(&[
-        "play",
-        &own,
-        "--policy",
-        "clamp",
-        "--protocol",
-        "maestro",
-        "--output",
-        &out,
-    ]);
+    let o = play(&own, &["--policy", "clamp"]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
 
     // The figure's rig with output 0 widened to 500–2500 µs: a bigger sibling.
@@ -164,47 +152,15 @@ fn play_holds_a_servo_clip_to_the_figure() {
     let wide_rig = path("wide.toml");
     std::fs::write(&wide_rig, wide_toml).expect("write rig");
     let wide = path("wide.mcb");
-    let o = mocap(&[
-        "encode",
-        "assets/animatronic_demo.bvh",
-        "--rig",
-        &wide_rig,
-        "--max-error",
-        "0.5deg",
-        "-o",
-        &wide,
-    ]);
-    assert!(o.status.success(), "{}", text(&o.stderr));
-    let o = mocap(&[
-        "play",
-        &wide,
-        "--rig",
-        rig,
-        "--protocol",
-        "maestro",
-        "--fast",
-        "--output",
-        &out,
-    ]);
+    encode_for(&wide_rig, &wide);
+    let o = play(&wide, &["--rig", rig]);
     assert_eq!(o.status.code(), Some(1));
     assert!(
         text(&o.stderr).contains("servo output 0 leaves the figure's hard limits"),
         "{}",
         text(&o.stderr)
     );
-    let o = mocap(&[
-        "play",
-        &wide,
-        "--rig",
-        rig,
-        "--policy",
-        "clamp",
-        "--protocol",
-        "maestro",
-        "--fast",
-        "--output",
-        &out,
-    ]);
+    let o = play(&wide, &["--rig", rig, "--policy", "clamp"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let err = text(&o.stderr);
     assert!(err.contains("played clamped"), "{err}");
