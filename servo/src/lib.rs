@@ -14,7 +14,9 @@
 //!
 //! ```text
 //! decoded frame / streamed Pose ──► Playback::tick ──► ServoOutput::write
-//!                              (Limiter::apply: clamp, speed)
+//!                              (Limiter::apply: clamp, speed;
+//!                               then HardStage::apply: the figure's
+//!                               own range, speed, acceleration)
 //!                                                      ├► PwmOutput     → ServoBank::write     (PWM)
 //!                                                      ├► Pca9685Output → Pca9685Servos::write (I²C)
 //!                                                      ├► MaestroOutput → maestro::set_target  (UART)
