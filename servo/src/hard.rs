@@ -270,11 +270,6 @@ pub struct HardStage<const N: usize> {
 }
 
 impl<const N: usize> HardStage<N> {
-    /// A stage that passes every pulse through unchanged.
-    pub fn open() -> Self {
-        Self::new([HardStep::OPEN; N])
-    }
-
     /// A stage for `steps`, at rest at their neutrals.
     pub fn new(steps: [HardStep; N]) -> Self {
         let mut pos = [0u16; N];
@@ -295,19 +290,9 @@ impl<const N: usize> HardStage<N> {
         &self.steps
     }
 
-    /// Sets each servo's position (at rest) without counting a change: the
-    /// pulse the clip's own stage starts from, so a pass-through stage
-    /// does not move on its first tick.
-    pub fn start_at(&mut self, pulses: &[u16; N]) {
-        for ((p, v), (&q, s)) in self
-            .pos
-            .iter_mut()
-            .zip(&mut self.vel)
-            .zip(pulses.iter().zip(&self.steps))
-        {
-            *p = q.max(s.min_qus).min(s.max_qus);
-            *v = 0;
-        }
+    /// Each servo's last pulse, ¼ µs.
+    pub const fn positions(&self) -> &[u16; N] {
+        &self.pos
     }
 
     /// Moves each servo one tick towards `pulses`; writes the result back
@@ -459,9 +444,9 @@ mod tests {
     }
 
     #[test]
-    fn open_stage_passes_pulses_through() {
-        let mut stage = HardStage::<3>::open();
-        stage.start_at(&[100, 6000, 60_000]);
+    fn open_steps_pass_pulses_through() {
+        let mut stage = HardStage::<3>::new([HardStep::OPEN; 3]);
+        assert_eq!(stage.positions(), &[6000; 3]);
         let mut q = [0, 16_000, 65_535];
         stage.apply(&mut q);
         assert_eq!(q, [0, 16_000, 65_535]);

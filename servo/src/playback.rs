@@ -152,16 +152,11 @@ impl<const N: usize> Playback<N> {
                 *step = HardStep::at_rate(limit, self.rate_mhz);
             }
         }
-        let mut stage = HardStage::new(steps);
-        // Both stages start where the figure rests: the clip's stage at its
-        // own neutrals (the pulses it was going to start from), the hard
-        // stage at the figure's.
-        let mut start = self.held;
-        for (q, s) in start.iter_mut().zip(&steps).take(self.count) {
-            *q = s.neutral_qus;
-        }
-        stage.start_at(&start);
-        self.held = start;
+        // The clip's stage starts at its own neutrals (the pulses it was
+        // going to start from), the hard stage and the servos at the
+        // figure's.
+        let stage = HardStage::new(steps);
+        self.held = *stage.positions();
         self.hard = Some(stage);
         Ok((self, fit))
     }
