@@ -121,7 +121,8 @@ impl<const N: usize> Playback<N> {
     /// This playback with the figure's hard limits applied after the clip's
     /// own to every pulse, and the return to rest going to the figure's
     /// neutrals at its speed and acceleration. `matches_figure` says whether
-    /// the clip was made for this figure (its rig digest is the figure's);
+    /// the clip was made for this figure (today: its rig table is the
+    /// figure's, as `mocap play --rig` compares them);
     /// when it is not, `policy` decides: [`Policy::Refuse`] refuses it,
     /// [`Policy::ClampIfInside`] refuses it unless every servo lies inside
     /// the hard limits ([`HardLimits::fit`]), [`Policy::ClampAlways`] plays
