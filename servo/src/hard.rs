@@ -16,6 +16,8 @@
 
 use mocap_decoder::RigServo;
 
+use crate::ServoLimits;
+
 /// One output of the figure: the pulses its mechanism allows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -173,11 +175,22 @@ impl HardStep {
     /// `max_accel_qus` — except to come back into the range — and brakes
     /// early enough to stop on a target that holds still.
     pub fn step(&self, pos: u16, vel: i32, target: u16) -> (u16, i32) {
-        let target = target.max(self.min_qus).min(self.max_qus);
+        // Range and speed are the clip limiter's own rules.
+        let speed_limit = ServoLimits {
+            min_qus: self.min_qus,
+            max_qus: self.max_qus,
+            neutral_qus: self.neutral_qus,
+            max_step_qus: self.max_step_qus,
+        };
+        let target = speed_limit.clamp(target);
         if !(self.min_qus..=self.max_qus).contains(&pos) {
             // Only before the first tick of a wrongly built stage: back
             // inside at once, at rest.
-            return (pos.max(self.min_qus).min(self.max_qus), 0);
+            return (speed_limit.clamp(pos), 0);
+        }
+        if self.max_accel_qus == 0 {
+            let next = speed_limit.step(pos, target);
+            return (next, i32::from(next).wrapping_sub(i32::from(pos)));
         }
         let d = i32::from(target).wrapping_sub(i32::from(pos));
         let dist = d.unsigned_abs();
@@ -185,19 +198,12 @@ impl HardStep {
         if self.max_step_qus > 0 {
             speed = speed.min(u32::from(self.max_step_qus));
         }
-        let a = u32::from(self.max_accel_qus);
-        let v = if a == 0 {
-            if d < 0 {
-                0i32.wrapping_sub(speed as i32)
-            } else {
-                speed as i32
-            }
-        } else {
+        let v = {
             // The fastest speed that still stops within `dist` braking by
             // `a` per tick ([`brake_speed`]), kept against the target and
             // against both range ends, so the servo never has to stop harder
             // than `a`, even when the target jumps behind it.
-            let a64 = i64::from(a);
+            let a64 = i64::from(self.max_accel_qus);
             let brake = |dist: i64| brake_speed(a64, dist);
             let speed = i64::from(speed).min(brake(i64::from(dist)));
             let want = if d < 0 {
