@@ -11,6 +11,11 @@
 //! It reaches src/main.rs as `OUT_DIR/config.rs` (`const SAMPLE_US: u64`, 0 = every frame),
 //! with the servo output (`$MOCAP_SERVO`, `const SERVO`) and the streaming mode
 //! (`$MOCAP_STREAM=1`, `const STREAM`).
+//!
+//! The figure — the rig file of the mechanism this firmware drives (`$MOCAP_FIGURE`, default
+//! `../assets/rigs/animatronic_demo.toml`) — becomes `OUT_DIR/figure.rs`: its rig table, its
+//! hard limits and the policy for clips made for another rig (`$MOCAP_POLICY`), see
+//! [`figure`].
 
 use std::env;
 use std::fs;
@@ -154,6 +159,9 @@ fn main() {
     if stream && sample_us != 0 {
         fail("mocap-firmware: MOCAP_STREAM and MOCAP_SAMPLE_US exclude each other");
     }
+    // ---- the figure: its rig file, compiled into hard limits (src/servo.rs)
+    figure(&manifest_dir, &out_dir);
+
     let config = format!(
         "/// Sampling period in µs (`MOCAP_SAMPLE_US`); 0 plays every frame.\n\
          pub const SAMPLE_US: u64 = {sample_us};\n\
@@ -162,12 +170,83 @@ fn main() {
          /// Streaming mode (`MOCAP_STREAM=1`).\n\
          pub const STREAM: bool = {stream};\n"
     );
-    let config_path = out_dir.join("config.rs");
-    if fs::read_to_string(&config_path).ok().as_deref() != Some(config.as_str()) {
-        fs::write(&config_path, config).unwrap_or_else(|e| {
+    write_if_changed(&out_dir.join("config.rs"), config.as_bytes());
+}
+
+const DEFAULT_FIGURE: &str = "../assets/rigs/animatronic_demo.toml";
+
+/// `OUT_DIR/figure.rs`, from the figure's rig file (`$MOCAP_FIGURE`, default
+/// [`DEFAULT_FIGURE`]; the TOML `mocap encode --rig` reads) and the policy for clips made for
+/// another rig (`$MOCAP_POLICY`: `refuse`, `clamp-if-inside` (default) or `clamp`, the names of
+/// `mocap play --policy`). The conversion is the encoder's own (`Figure::from_rig`, the one
+/// `mocap play --rig` applies), so host and firmware hold a clip to the same table:
+/// `FIGURE_SERVOS` (the rig table a clip made for this figure carries), `FIGURE_RATE_MHZ`,
+/// `HARD_LIMITS` (one per output), `POLICY`.
+fn figure(manifest_dir: &Path, out_dir: &Path) {
+    use mocap_encoder::play::{Figure, Policy};
+    use mocap_encoder::rig::Rig;
+
+    println!("cargo:rerun-if-env-changed=MOCAP_FIGURE");
+    println!("cargo:rerun-if-env-changed=MOCAP_POLICY");
+    let path = match env::var_os("MOCAP_FIGURE") {
+        Some(path) if !path.is_empty() => manifest_dir.join(path),
+        _ => manifest_dir.join(DEFAULT_FIGURE),
+    };
+    println!("cargo:rerun-if-changed={}", path.display());
+    let rig = Rig::read_file(&path).unwrap_or_else(|e| {
+        fail(&format!(
+            "mocap-firmware: the figure's rig file (MOCAP_FIGURE): {e}"
+        ))
+    });
+    let policy = match env::var("MOCAP_POLICY").as_deref().map(str::trim) {
+        Ok("") | Err(env::VarError::NotPresent) => Policy::ClampIfInside,
+        Ok(name) => Policy::from_name(name).unwrap_or_else(|| {
+            fail(&format!(
+                "mocap-firmware: MOCAP_POLICY must be one of {} (or unset: clamp-if-inside), got '{name}'",
+                Policy::ALL.map(|(_, n)| n).join(", ")
+            ))
+        }),
+        Err(e) => fail(&format!("mocap-firmware: MOCAP_POLICY: {e}")),
+    };
+    let figure = Figure::from_rig(&rig, policy);
+    let n = figure.servos.len();
+    // `Debug` of these plain structs is their struct expression.
+    let servos: String = figure
+        .servos
+        .iter()
+        .map(|s| format!("    {s:?},\n"))
+        .collect();
+    let limits: String = figure
+        .limits
+        .iter()
+        .map(|l| format!("    {l:?},\n"))
+        .collect();
+    let code = format!(
+        "// The figure's rig file: {path}\n\
+         /// The figure's name (`[rig] name`).\n\
+         pub const FIGURE_NAME: &str = {name:?};\n\
+         /// The figure's tick rate, millihertz.\n\
+         pub const FIGURE_RATE_MHZ: u32 = {rate};\n\
+         /// The figure's servos as the rig table of a clip made for it holds them.\n\
+         pub static FIGURE_SERVOS: [RigServo; {n}] = [\n{servos}];\n\
+         /// The figure's hard limits, one per output.\n\
+         pub static HARD_LIMITS: [HardLimit; {n}] = [\n{limits}];\n\
+         /// What to do with a clip made for another rig (`MOCAP_POLICY`).\n\
+         pub const POLICY: Policy = Policy::{policy:?};\n",
+        path = path.display(),
+        name = rig.name,
+        rate = figure.rate_mhz,
+    );
+    write_if_changed(&out_dir.join("figure.rs"), code.as_bytes());
+}
+
+fn write_if_changed(to: &Path, bytes: &[u8]) {
+    // Rewrite only on change: an unchanged copy keeps the firmware from recompiling.
+    if fs::read(to).ok().as_deref() != Some(bytes) {
+        fs::write(to, bytes).unwrap_or_else(|e| {
             fail(&format!(
                 "mocap-firmware: cannot write {}: {e}",
-                config_path.display()
+                to.display()
             ))
         });
     }
@@ -180,13 +259,5 @@ fn copy_or_fail(from: &Path, to: &Path, what: &str) {
             from.display()
         ))
     });
-    // Rewrite only on change: an unchanged copy keeps the firmware from recompiling.
-    if fs::read(to).ok().as_deref() != Some(bytes.as_slice()) {
-        fs::write(to, &bytes).unwrap_or_else(|e| {
-            fail(&format!(
-                "mocap-firmware: cannot write {}: {e}",
-                to.display()
-            ))
-        });
-    }
+    write_if_changed(to, &bytes);
 }

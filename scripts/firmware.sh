@@ -14,13 +14,17 @@
 #       (MOCAP_SERVO; see firmware-example/README.md).
 #       --stream builds the streaming mode (MOCAP_STREAM=1): the firmware reads postcard + COBS +
 #       CRC frames (SPEC.md §8, `mocap send`) from its UART and plays the uploaded clip or the
-#       live poses on the rig of --clip (a servo clip) through --servo (default maestro);
+#       live poses on the figure (--figure) through --servo (default maestro);
 #       --input FILE feeds FILE to the UART's receiver (QEMU's -serial stdio reads it from
 #       stdin, only as fast as the UART takes bytes); the run ends when the servos are parked
 #       after a Stop or after the uploaded clip.
 #       Builds, then runs the ELF in QEMU headless: the UART on stdout, semihosting on. The exit
 #       code is the firmware's (0 = every frame decoded), 124 on timeout (default 300 s).
 #       --icount adds `-icount shift=0` so the instruction figures in the output are exact.
+#       --figure RIG.toml sets the figure whose hard limits the firmware compiles in
+#       (MOCAP_FIGURE; default assets/rigs/animatronic_demo.toml), --policy
+#       refuse|clamp-if-inside|clamp what it does with a servo clip made for another rig
+#       (MOCAP_POLICY; default clamp-if-inside); see firmware-example/README.md.
 #   scripts/firmware.sh size --board B [--clip PATH.mcb] [--sample-us P] [--servo OUTPUT] [--stream]
 #       Builds, then prints key=value lines: text, data, bss, flash_bytes (text+data),
 #       ram_static_bytes (data+bss), flash_clip_bytes, flash_without_clip_bytes,
@@ -76,6 +80,8 @@ SAMPLE_US=""
 SERVO=""
 STREAM=""
 INPUT=/dev/null
+FIGURE="$MOCAP_REPO_ROOT/assets/rigs/animatronic_demo.toml"
+POLICY=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
@@ -89,6 +95,10 @@ while [ "$#" -gt 0 ]; do
         --stream) STREAM=1; shift ;;
         --input) [ "$#" -ge 2 ] || die "--input needs a file"; INPUT="$2"; shift 2 ;;
         --input=*) INPUT="${1#*=}"; shift ;;
+        --figure) [ "$#" -ge 2 ] || die "--figure needs a rig file"; FIGURE="$2"; shift 2 ;;
+        --figure=*) FIGURE="${1#*=}"; shift ;;
+        --policy) [ "$#" -ge 2 ] || die "--policy needs a value"; POLICY="$2"; shift 2 ;;
+        --policy=*) POLICY="${1#*=}"; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -113,6 +123,11 @@ TARGET="$(board_target "$BOARD")"
 [ -n "$STREAM" ] && [ "$CMD" = run ] && [ "$INPUT" = /dev/null ] \
     && die "run --stream needs --input FILE (e.g. from: mocap send CLIP --output FILE --fast)"
 [ -n "$STREAM" ] && [ -n "$SAMPLE_US" ] && die "--stream and --sample-us exclude each other"
+[ -r "$FIGURE" ] || die "--figure: cannot read $FIGURE"
+case "$POLICY" in
+    ""|refuse|clamp-if-inside|clamp) ;;
+    *) die "--policy must be refuse, clamp-if-inside or clamp, got '$POLICY'" ;;
+esac
 case "$SERVO" in
     ""|maestro|ssc32|pwm|pca9685) ;;
     *) die "--servo must be maestro, ssc32, pwm or pca9685, got '$SERVO'" ;;
@@ -131,9 +146,11 @@ build() {
         fi
         die "clip not found: $CLIP"
     fi
-    local clip_abs sha staged target_dir lock elf_dir elf
+    local clip_abs sha staged target_dir lock elf_dir elf figure_abs figure_sha staged_figure
     clip_abs="$(cd "$(dirname "$CLIP")" && pwd)/$(basename "$CLIP")"
     sha="$(sha256sum "$clip_abs" | cut -c1-16)"
+    figure_abs="$(cd "$(dirname "$FIGURE")" && pwd)/$(basename "$FIGURE")"
+    figure_sha="$(sha256sum "$figure_abs" | cut -c1-12)"
 
     mocap_toolchain_setup "$TARGET" >&2 || build_failed "toolchain setup failed (log: $MOCAP_TOOLCHAIN_LOG)"
     mocap_toolchain_summary >&2
@@ -146,9 +163,16 @@ build() {
         cp "$clip_abs" "$staged.$$" && mv -f "$staged.$$" "$staged"
     fi
 
+    # The figure too, under its content's name, keeping the file name for the build's messages.
+    mkdir -p "$FW/target/figures/$figure_sha"
+    staged_figure="$FW/target/figures/$figure_sha/$(basename "$FIGURE")"
+    if ! cmp -s "$figure_abs" "$staged_figure" 2>/dev/null; then
+        cp "$figure_abs" "$staged_figure.$$" && mv -f "$staged_figure.$$" "$staged_figure"
+    fi
+
     target_dir="$FW/target/$BOARD"
     elf_dir="$target_dir/elf"
-    elf="$elf_dir/mocap-firmware-$sha${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}.elf"
+    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/$BOARD.lock"
     # One build per board at a time; the ELF is copied out under the lock.
@@ -156,7 +180,7 @@ build() {
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
         MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
-            CARGO_TARGET_DIR="$target_dir" \
+            MOCAP_FIGURE="$staged_figure" MOCAP_POLICY="$POLICY" CARGO_TARGET_DIR="$target_dir" \
             mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"

@@ -565,23 +565,6 @@ fn error_messages_name_what_is_wrong() {
     assert!(garbage.starts_with("internal error: "), "{garbage}");
 }
 
-/// The demo rig with every range widened (angle and pulse ×1.8 about their
-/// middles, pulses kept in 400–2600 µs) and no speed or acceleration limit:
-/// a clip made for a bigger sibling figure.
-fn widened(rig: &Rig) -> Rig {
-    let mut wide = rig.clone();
-    let stretch = |[a, b]: [f64; 2]| {
-        let (c, h) = ((a + b) / 2.0, (b - a) / 2.0 * 1.8);
-        [c - h, c + h]
-    };
-    for s in &mut wide.servos {
-        s.angle = stretch(s.angle);
-        s.pulse = stretch(s.pulse).map(|p| p.clamp(400.0, 2600.0));
-        (s.max_speed, s.max_accel) = (None, None);
-    }
-    wide
-}
-
 /// A clip for a wider rig played on the demo figure (`mocap play --rig`):
 /// refused under `refuse` and `clamp-if-inside`; under `clamp`, every pulse
 /// inside the figure's pulse ranges, within its speed and acceleration at
@@ -592,7 +575,8 @@ fn a_clip_for_a_wider_rig_stays_inside_the_figures_hard_limits() {
     use mocap_encoder::play::{servo_clip_stream_on, Figure, Fit, Policy};
     use mocap_servo::HardStep;
     let (figure_rig, tracks) = demo_tracks();
-    let wide = widened(&figure_rig);
+    // A clip made for a bigger sibling figure: every range ×1.8, no speed or acceleration limit.
+    let wide = Rig::read_file(&root().join("assets/rigs/animatronic_demo_wide.toml")).unwrap();
     let wide_tracks = {
         let m = bvh::read_file(&root().join("assets/animatronic_demo.bvh")).unwrap();
         let channels = wide.resolve(&m.skeleton).unwrap();

@@ -195,9 +195,20 @@ enum Failure {
     Decoder(&'static str, Error),
     Servo(&'static str),
     ServoCrate(&'static str, mocap_servo::Error),
-    FrameIndex { expected: u32, got: u32 },
-    FrameCount { header: u32, decoded: u32 },
-    SampleCount { expected: u32, got: u32 },
+    /// The figure refuses the clip (made for another rig, by the policy; or an output it lacks).
+    Figure(mocap_servo::PlaybackError),
+    FrameIndex {
+        expected: u32,
+        got: u32,
+    },
+    FrameCount {
+        header: u32,
+        decoded: u32,
+    },
+    SampleCount {
+        expected: u32,
+        got: u32,
+    },
 }
 
 /// Number of samples in sample mode: t = 0, P, 2P, … up to and including the first t past
@@ -325,9 +336,9 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     let parse_ticks = ticks::since(t0, ticks::now());
 
     if STREAM {
-        // The embedded servo clip gives the rig (servos, limits, rate); the motion comes over
-        // the UART.
-        let rig = servo::rig_of(&clip)?;
+        // The figure compiled in gives the rig (servos, limits, rate, hard limits); the motion
+        // comes over the UART.
+        let rig = servo::figure_playback(text)?;
         return servo::drive(rig, stream::Stream { calibration_ticks }, text);
     }
     if SERVO != 0 {
@@ -445,6 +456,11 @@ fn report(text: &mut Out, failure: &Failure) {
         }
         Failure::ServoCrate(what, error) => {
             text.str("# error servo ").str(what).str(": ");
+            let _ = core::fmt::write(&mut FmtAdapter(text), format_args!("{error}"));
+            text.nl();
+        }
+        Failure::Figure(error) => {
+            text.str("# error figure: ");
             let _ = core::fmt::write(&mut FmtAdapter(text), format_args!("{error}"));
             text.nl();
         }

@@ -24,7 +24,7 @@ use mocap_decoder::{Clip, Player};
 use mocap_servo::output::{MaestroOutput, Pca9685Output, PwmOutput, ServoOutput, Ssc32Output};
 use mocap_servo::pca9685::{self, Address, Pca9685Servos};
 use mocap_servo::record::{DutyRecorder, I2cRecorder, SerialRecorder};
-use mocap_servo::{ssc32, OutputError, Playback, PlaybackError, ServoBank};
+use mocap_servo::{ssc32, Fit, HardLimits, OutputError, Playback, PlaybackError, ServoBank};
 
 use crate::config::SERVO;
 use crate::{decoder_glue, instructions, ticks, Failure, Out};
@@ -56,15 +56,84 @@ const I2C_RECORD_BYTES: usize = 7 * MAX_SERVOS + 8;
 /// pulse to their limits.
 pub type Rig = Playback<MAX_SERVOS>;
 
-/// The rig table of a servo clip, with its limits; the limiter starts at neutral.
-pub fn rig_of(clip: &Clip<'_>) -> Result<Rig, Failure> {
+/// The figure this firmware drives, compiled in from its rig file by build.rs (`MOCAP_FIGURE`,
+/// `MOCAP_POLICY`): `FIGURE_NAME`, `FIGURE_RATE_MHZ`, `FIGURE_SERVOS` (the rig table of a clip
+/// made for it), `HARD_LIMITS` (per output: pulse range, neutral, speed, acceleration) and
+/// `POLICY` (what to do with a clip made for another rig).
+pub mod figure {
+    use mocap_decoder::RigServo;
+    use mocap_servo::{HardLimit, Policy};
+    include!(concat!(env!("OUT_DIR"), "/figure.rs"));
+}
+use figure::{FIGURE_NAME, FIGURE_RATE_MHZ, FIGURE_SERVOS, HARD_LIMITS, POLICY};
+
+const _: () = assert!(
+    FIGURE_SERVOS.len() <= MAX_SERVOS,
+    "the figure (MOCAP_FIGURE) has more servos than the firmware holds (MAX_SERVOS)"
+);
+
+/// The figure's hard limits: every command of every mode passes them, after the clip's own
+/// limits (`Playback::with_hard_limits`).
+pub const FIGURE: HardLimits<'static> = HardLimits::new(&HARD_LIMITS);
+
+/// Whether a clip's rig table is the figure's own (the same rate and servos).
+fn is_figures(table: &mocap_decoder::Rig<'_>) -> bool {
+    table.rate_mhz() == FIGURE_RATE_MHZ
+        && table.servo_count() == FIGURE_SERVOS.len()
+        && table.servos().zip(&FIGURE_SERVOS).all(|(a, b)| a == *b)
+}
+
+fn playback_failure(e: PlaybackError) -> Failure {
+    match e {
+        PlaybackError::Limits { error, .. } => Failure::ServoCrate("limits", error),
+        PlaybackError::TooManyServos { .. } => Failure::Servo("more servos than MAX_SERVOS"),
+        refused => Failure::Figure(refused),
+    }
+}
+
+/// The playback of a servo clip on this figure: the clip's rig table with its own limits, then
+/// the figure's hard limits. A clip made for another rig plays only as [`POLICY`] allows
+/// (else [`Failure::Figure`]); `# figure …` says which case this is.
+pub fn playback_of(clip: &Clip<'_>, text: &mut Out) -> Result<Rig, Failure> {
     let table = clip
         .rig()
         .ok_or(Failure::Servo("the clip has no rig table"))?;
-    Rig::from_rig(table).map_err(|e| match e {
-        PlaybackError::Limits { error, .. } => Failure::ServoCrate("limits", error),
-        _ => Failure::Servo("more servos than MAX_SERVOS"),
-    })
+    let same = is_figures(table);
+    let rig = Rig::from_rig(table).map_err(playback_failure)?;
+    print_figure(same, FIGURE.fit(rig.servos()), text);
+    let (rig, _) = rig
+        .with_hard_limits(&FIGURE, same, POLICY)
+        .map_err(playback_failure)?;
+    Ok(rig)
+}
+
+/// The figure's own playback (the streaming mode's rig): its servos at its rate, through its
+/// hard limits.
+pub fn figure_playback(text: &mut Out) -> Result<Rig, Failure> {
+    let rig = Rig::new(FIGURE_SERVOS.iter().copied(), FIGURE_RATE_MHZ).map_err(playback_failure)?;
+    let (rig, fit) = rig
+        .with_hard_limits(&FIGURE, true, POLICY)
+        .map_err(playback_failure)?;
+    print_figure(true, fit, text);
+    Ok(rig)
+}
+
+/// `# figure name=… servos=… policy=… same_rig=0|1 fit=inside|outside|unknown_output [output=N]`.
+fn print_figure(same: bool, fit: Fit, text: &mut Out) {
+    text.str("# figure name=")
+        .str(FIGURE_NAME)
+        .kv("servos", FIGURE_SERVOS.len() as u64)
+        .str(" policy=")
+        .str(POLICY.name())
+        .kv("same_rig", u64::from(same));
+    match fit {
+        Fit::Inside => text.str(" fit=inside"),
+        Fit::Outside { output } => text.str(" fit=outside").kv("output", u64::from(output)),
+        Fit::UnknownOutput { output } => text
+            .str(" fit=unknown_output")
+            .kv("output", u64::from(output)),
+    };
+    text.nl();
 }
 
 /// Instruction figures of the timed ticks.
@@ -137,6 +206,35 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
     pub fn park(&mut self, text: &mut Out) -> Result<(), Failure> {
         let show = &mut self.show;
         self.rig.park(&mut self.output, |_| show(text))
+    }
+
+    /// What the figure's hard limits changed: `# hard_clamp output= ticks= worst_qus=` per
+    /// servo they changed, then `# hard_clamps servos= ticks=` (servos changed, ticks in all).
+    pub fn print_hard_clamps(&self, text: &mut Out) {
+        let mut servos = 0u64;
+        let mut all = 0u64;
+        for ((servo, &ticks), &worst) in self
+            .rig
+            .servos()
+            .iter()
+            .zip(self.rig.hard_clamps())
+            .zip(self.rig.hard_worst())
+        {
+            if ticks == 0 {
+                continue;
+            }
+            servos += 1;
+            all += u64::from(ticks);
+            text.str("# hard_clamp")
+                .kv("output", u64::from(servo.output))
+                .kv("ticks", u64::from(ticks))
+                .kv("worst_qus", u64::from(worst))
+                .nl();
+        }
+        text.str("# hard_clamps")
+            .kv("servos", servos)
+            .kv("ticks", all)
+            .nl();
     }
 
     /// Per-tick figures: `# <key>= per_tick= max_tick= output_per_tick= cpu_x10000_at_48mhz=`.
@@ -318,6 +416,7 @@ impl Mode for FlashClip<'_> {
             driver.clip_tick(&mut player, t_us, &mut angles, text)?;
         }
         driver.park(text)?;
+        driver.print_hard_clamps(text);
         driver.print_stats("servo_ticks", self.calibration_ticks, text);
         text.str("#")
             .kv("stack_bytes_used", crate::stack::used_bytes() as u64)
@@ -328,7 +427,7 @@ impl Mode for FlashClip<'_> {
 
 /// Servo mode: the flash clip through the selected output.
 pub fn run(clip: &Clip<'static>, calibration_ticks: u32, text: &mut Out) -> Result<(), Failure> {
-    let rig = rig_of(clip)?;
+    let rig = playback_of(clip, text)?;
     drive(
         rig,
         FlashClip {

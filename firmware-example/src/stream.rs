@@ -8,9 +8,9 @@
 //!   are dropped and counted, reception resynchronises at the next `00`. (Here the ring is
 //!   filled by polling between ticks and QEMU holds bytes back while the UART is full; on a
 //!   board, `Link::pump` is the receive interrupt's body.)
-//! - **Rig.** The servos and their limits are the firmware's own: the rig table of the servo
-//!   clip embedded at build time (`MOCAP_CLIP`). A streamed clip must carry the same rig table,
-//!   and live poses are held to its limits by the `Limiter`, whatever the host sends.
+//! - **Rig.** The servos and their limits are the figure's, compiled in at build time
+//!   (`MOCAP_FIGURE`, `crate::servo::figure`). A streamed clip must carry the figure's rig
+//!   table, and live poses are held to its limits and hard limits, whatever the host sends.
 //! - **Upload.** `ClipChunk`s are assembled in a fixed RAM buffer
 //!   ([`crate::board::CLIP_BUFFER_BYTES`]) in any order, by `mocap_servo::stream::upload`'s
 //!   rule (SPEC.md §8.1): the first chunk accepted fixes `total` (at most the buffer); each

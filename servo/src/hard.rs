@@ -50,6 +50,30 @@ pub enum Policy {
     ClampAlways,
 }
 
+impl Policy {
+    /// Every policy, by its name: the spelling of `mocap play --policy` and
+    /// of the firmware's build option (`MOCAP_POLICY`).
+    pub const ALL: [(Policy, &'static str); 3] = [
+        (Policy::Refuse, "refuse"),
+        (Policy::ClampIfInside, "clamp-if-inside"),
+        (Policy::ClampAlways, "clamp"),
+    ];
+
+    /// The policy of a name ([`Policy::ALL`]).
+    pub fn from_name(name: &str) -> Option<Policy> {
+        Self::ALL.iter().find(|(_, n)| *n == name).map(|(p, _)| *p)
+    }
+
+    /// This policy's name ([`Policy::ALL`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            Policy::Refuse => "refuse",
+            Policy::ClampIfInside => "clamp-if-inside",
+            Policy::ClampAlways => "clamp",
+        }
+    }
+}
+
 /// How a rig lies against the figure's hard limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -363,6 +387,15 @@ impl<const N: usize> HardStage<N> {
 mod tests {
     use super::*;
     use crate::test_rng::TestRng;
+
+    #[test]
+    fn every_policy_reads_back_from_its_name() {
+        for (policy, name) in Policy::ALL {
+            assert_eq!(policy.name(), name);
+            assert_eq!(Policy::from_name(name), Some(policy));
+        }
+        assert_eq!(Policy::from_name("clamp_if_inside"), None);
+    }
 
     fn limit(min: u16, max: u16, speed: u32, accel: u32) -> HardLimit {
         HardLimit {

@@ -135,16 +135,36 @@ pub fn qemu_available() -> bool {
     ok
 }
 
-/// `scripts/firmware.sh run --board <board> --clip <clip> <args…>`: the
-/// firmware's UART output; panics (with its `#` lines) unless it succeeds.
-pub fn run_firmware(board: &str, clip: &std::path::Path, args: &[&str]) -> String {
-    let out = std::process::Command::new("bash")
+/// `scripts/firmware.sh run --board <board> --clip <clip> <args…>`: whether
+/// the firmware reported success (exit 0; 1 is its reported failure, anything
+/// else panics: a build, usage or QEMU failure), and its UART output.
+pub fn run_firmware_outcome(board: &str, clip: &std::path::Path, args: &[&str]) -> (bool, String) {
+    let out = firmware_sh(board, clip, args);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        matches!(out.status.code(), Some(0 | 1)),
+        "{board} {} {args:?}: firmware.sh failed ({}):\n{}",
+        clip.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stderr),
+    );
+    (out.status.success(), stdout)
+}
+
+fn firmware_sh(board: &str, clip: &std::path::Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new("bash")
         .arg(workspace_root().join("scripts/firmware.sh"))
         .args(["run", "--board", board, "--clip"])
         .arg(clip)
         .args(args)
         .output()
-        .expect("scripts/firmware.sh runs");
+        .expect("scripts/firmware.sh runs")
+}
+
+/// `scripts/firmware.sh run --board <board> --clip <clip> <args…>`: the
+/// firmware's UART output; panics (with its `#` lines) unless it succeeds.
+pub fn run_firmware(board: &str, clip: &std::path::Path, args: &[&str]) -> String {
+    let out = firmware_sh(board, clip, args);
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),
@@ -181,11 +201,32 @@ pub fn servo_demo_clip_with(
     name: &str,
     codec: mocap_encoder::encode::CodecChoice,
 ) -> (PathBuf, Vec<u8>) {
+    servo_demo_clip_for(name, DEMO_RIG, codec)
+}
+
+/// The demo figure's rig file: the default figure the firmware is built for.
+pub const DEMO_RIG: &str = "assets/rigs/animatronic_demo.toml";
+/// The demo rig widened for a bigger sibling figure (every range ×1.8, no speed limits).
+pub const WIDE_RIG: &str = "assets/rigs/animatronic_demo_wide.toml";
+
+/// The demo figure as `mocap play --rig assets/rigs/animatronic_demo.toml --policy …` and the
+/// firmware built for it (the default `MOCAP_FIGURE`) hold a servo clip to it.
+pub fn demo_figure(policy: mocap_servo::Policy) -> mocap_encoder::play::Figure {
+    let rig = mocap_encoder::rig::Rig::read_file(&workspace_root().join(DEMO_RIG)).unwrap();
+    mocap_encoder::play::Figure::from_rig(&rig, policy)
+}
+
+/// The demo motion as a servo clip of the rig file `rig` (relative to the workspace).
+pub fn servo_demo_clip_for(
+    name: &str,
+    rig: &str,
+    codec: mocap_encoder::encode::CodecChoice,
+) -> (PathBuf, Vec<u8>) {
     use mocap_encoder::encode::{Bound, BoundSpec};
     use mocap_encoder::servo_clip::{ServoEncodeOptions, ServoNames, ServoRate};
     use mocap_encoder::{generate, rig::Rig, servo_clip, units};
     let root = workspace_root();
-    let rig = Rig::read_file(&root.join("assets/rigs/animatronic_demo.toml")).unwrap();
+    let rig = Rig::read_file(&root.join(rig)).unwrap();
     let m = generate::animatronic_demo();
     let channels = rig.resolve(&m.skeleton).unwrap();
     let tracks = rig.servo_tracks(&m, &channels, units::detect(&m).metres());

@@ -22,8 +22,8 @@ use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, clipfile, generate, motion::Motion, units};
 use mocap_tests::snapshot::{check_snapshot, first_difference};
 use mocap_tests::{
-    corpus_file, data_lines, qemu_available, run_firmware, servo_demo_clip, servo_demo_clip_with,
-    workspace_root,
+    corpus_file, data_lines, demo_figure, qemu_available, run_firmware, servo_demo_clip,
+    servo_demo_clip_with, workspace_root,
 };
 
 /// Sample mode period: a 50 Hz servo rate, which falls between the frames of
@@ -192,9 +192,11 @@ fn servo_clip_commands_match_host_on_three_cores() {
 }
 
 /// `mocap play`'s Maestro bytes as hex lines, its SSC-32 text without the `\r`.
+/// On the demo figure, as the firmware holds the clip to it (its default `MOCAP_FIGURE`).
 fn serial_lines(clip: &Clip<'_>, protocol: mocap_encoder::play::Protocol) -> String {
-    use mocap_encoder::play::{servo_clip_stream, Protocol};
-    let stream = servo_clip_stream(clip, protocol, None).unwrap();
+    use mocap_encoder::play::{servo_clip_stream_on, Policy, Protocol};
+    let figure = demo_figure(Policy::ClampIfInside);
+    let stream = servo_clip_stream_on(clip, &figure, protocol, None).unwrap();
     stream
         .ticks
         .iter()
@@ -303,13 +305,14 @@ fn pca9685_lines(pulses: &[Vec<u16>], outputs: &[u16]) -> String {
 /// tick; the host drives the same outputs with `mocap play`'s pulses.
 #[test]
 fn servo_clip_pwm_and_pca9685_match_host_on_three_cores() {
-    use mocap_encoder::play::{servo_clip_stream, Protocol};
+    use mocap_encoder::play::{servo_clip_stream_on, Policy, Protocol};
     if !qemu_available() {
         return;
     }
     let (path, bytes) = servo_demo_clip("servo-demo-pwm");
     let clip = Clip::parse(&bytes).unwrap();
-    let pulses = servo_clip_stream(&clip, Protocol::Maestro, None)
+    let figure = demo_figure(Policy::ClampIfInside);
+    let pulses = servo_clip_stream_on(&clip, &figure, Protocol::Maestro, None)
         .unwrap()
         .pulses;
     let outputs: Vec<u16> = clip.rig().unwrap().servos().map(|s| s.output).collect();

@@ -34,16 +34,19 @@
 use std::path::{Path, PathBuf};
 
 use mocap_decoder::Clip;
-use mocap_encoder::play::{clip_frames, pose_frames, servo_clip_stream, Protocol, ServoStream};
-use mocap_servo::output::{MaestroOutput, ServoOutput};
+use mocap_encoder::play::{
+    clip_frames, pose_frames, servo_clip_stream_on, Figure, Policy, Protocol, ServoStream,
+};
+use mocap_servo::output::MaestroOutput;
+use mocap_servo::record::SerialRecorder;
 use mocap_servo::stream::upload::{bitmap_words, Accepted, Play, Upload};
 use mocap_servo::stream::{
     decode_frame, encode_frame, FrameReceiver, Message, MAX_CHUNK_LEN, MAX_FRAME_LEN,
     PROTOCOL_VERSION,
 };
-use mocap_servo::{Limiter, ServoLimits};
+use mocap_servo::{HardLimits, Playback, ServoLimits};
 use mocap_tests::snapshot::check_snapshot;
-use mocap_tests::{qemu_available, run_firmware, servo_demo_clip, workspace_root};
+use mocap_tests::{demo_figure, qemu_available, run_firmware, servo_demo_clip, workspace_root};
 
 /// One byte in this many is hit by a random non-zero XOR.
 const CORRUPT_ONE_IN: u64 = 100;
@@ -413,31 +416,30 @@ fn check_safe(name: &str, ticks: &[Vec<u16>], limits: &[ServoLimits]) {
     }
 }
 
-/// SPEC.md §8's live-pose rules, through the same `Limiter` and `MaestroOutput` as the
-/// firmware: a pose per `seq` step, the last pose held over missing ones (at most
-/// `MAX_HOLD_TICKS`), stale or wrong-sized poses ignored, `Hello` forgets the last `seq`,
-/// `Stop` parks at the speed limits. Returns the Maestro lines and (applied, missing, stale).
-fn expected_pose_run(
-    received: &[Received],
-    limits: &[ServoLimits],
-    outputs: &[u16],
-) -> (String, [u64; 3]) {
-    let idle = ServoLimits::new(6000, 6000, 6000, 0).unwrap();
-    let mut all = [idle; MAX_SERVOS];
-    all[..limits.len()].copy_from_slice(limits);
-    let mut limiter = Limiter::new(all).unwrap();
-    let n = limits.len();
-    let mut targets = [6000u16; MAX_SERVOS];
-    let mut held = [0u16; MAX_SERVOS];
-    let mut text = String::new();
-    let emit = |pulses: &[u16], text: &mut String| {
-        let mut bytes = Vec::new();
-        MaestroOutput::new(&mut bytes, outputs)
+/// SPEC.md §8's live-pose rules, through the same `Playback` as the firmware (the figure's
+/// servos at its rate, its limits, then its hard limits) and `MaestroOutput`: a pose per `seq`
+/// step, the last pose held over missing ones (at most `MAX_HOLD_TICKS`), stale or wrong-sized
+/// poses ignored, `Hello` forgets the last `seq`, `Stop` parks at the speed limits. Returns the
+/// Maestro lines and (applied, missing, stale).
+fn expected_pose_run(received: &[Received], figure: &Figure) -> (String, [u64; 3]) {
+    let (mut playback, _) =
+        Playback::<MAX_SERVOS>::new(figure.servos.iter().copied(), figure.rate_mhz)
             .unwrap()
-            .write(pulses)
+            .with_hard_limits(&HardLimits::new(&figure.limits), true, figure.policy)
             .unwrap();
-        let hex: String = bytes.iter().map(|b| format!(" {b:02x}")).collect();
-        *text += &format!("m{hex}\n");
+    let outputs: Vec<u16> = figure.servos.iter().map(|s| s.output).collect();
+    let n = outputs.len();
+    let port = SerialRecorder::<{ 4 * MAX_SERVOS }>::new();
+    let mut output = MaestroOutput::new(&port, &outputs).unwrap();
+    let mut targets = [6000u16; MAX_SERVOS];
+    let mut text = String::new();
+    let emit = |_: &mut MaestroOutput<&SerialRecorder<{ 4 * MAX_SERVOS }>>, text: &mut String| {
+        port.with_bytes(|bytes| {
+            let hex: String = bytes.iter().map(|b| format!(" {b:02x}")).collect();
+            *text += &format!("m{hex}\n");
+        })
+        .unwrap();
+        port.clear();
     };
     let (mut applied, mut missing_total, mut stale) = (0, 0, 0);
     let mut live: Option<u16> = None;
@@ -455,12 +457,12 @@ fn expected_pose_run(
                 }
                 missing_total += u64::from(gap - 1);
                 for _ in 0..(gap - 1).min(MAX_HOLD_TICKS) {
-                    limiter.apply(&targets, &mut held).unwrap();
-                    emit(&held[..n], &mut text);
+                    playback.tick(&targets, &mut output).unwrap();
+                    emit(&mut output, &mut text);
                 }
                 targets[..n].copy_from_slice(pulses);
-                limiter.apply(&targets, &mut held).unwrap();
-                emit(&held[..n], &mut text);
+                playback.tick(&targets, &mut output).unwrap();
+                emit(&mut output, &mut text);
                 applied += 1;
                 live = Some(*seq);
             }
@@ -468,15 +470,9 @@ fn expected_pose_run(
             _ => {}
         }
     }
-    let parked = |l: &Limiter<MAX_SERVOS>| {
-        l.limits()
-            .iter()
-            .zip(l.last())
-            .all(|(s, &p)| p == s.neutral_qus)
-    };
-    while !parked(&limiter) {
-        limiter.stop_step(&mut held).unwrap();
-        emit(&held[..n], &mut text);
+    while !playback.parked() {
+        playback.stop_tick(&mut output).unwrap();
+        emit(&mut output, &mut text);
     }
     (text, [applied, missing_total, stale])
 }
@@ -568,10 +564,11 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
     }
     let (clip_path, clip_bytes) = servo_demo_clip("servo-demo-stream");
     let clip = Clip::parse(&clip_bytes).unwrap();
-    let played = servo_clip_stream(&clip, Protocol::Maestro, None).unwrap();
+    // The firmware plays on its figure (the default MOCAP_FIGURE, the demo rig).
+    let figure = demo_figure(Policy::ClampIfInside);
+    let played = servo_clip_stream_on(&clip, &figure, Protocol::Maestro, None).unwrap();
     let expected = maestro_lines(&played);
     let limits = played.limits.clone();
-    let outputs: Vec<u16> = clip.rig().unwrap().servos().map(|s| s.output).collect();
 
     let upload: Vec<u8> = clip_frames(&clip_bytes, false, 1).unwrap().concat();
     let carousel: Vec<u8> = clip_frames(&clip_bytes, false, CAROUSEL_PASSES)
@@ -686,8 +683,7 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
             check_safe(&what, &run.ticks, &limits);
             if *is_poses {
                 let received = host_receive(bytes);
-                let (text, [applied, missing, stale]) =
-                    expected_pose_run(&received, &limits, &outputs);
+                let (text, [applied, missing, stale]) = expected_pose_run(&received, &figure);
                 assert!(
                     run.maestro == text,
                     "{what}: commands differ from SPEC.md §8's pose rules ({} vs {} ticks)",

@@ -1,0 +1,141 @@
+//! The figure's hard limits in the firmware (issue: "no clip, show or stream can drive a servo
+//! past what the mechanism allows"): a clip encoded for a wider rig
+//! (`assets/rigs/animatronic_demo_wide.toml`, every range ×1.8, no speed limits) played by the
+//! firmware built for the demo figure (`assets/rigs/animatronic_demo.toml`, the default
+//! `MOCAP_FIGURE`) on every board, under each policy (`MOCAP_POLICY`, `firmware.sh --policy`):
+//!
+//! - `refuse` and `clamp-if-inside` (the default): the firmware refuses it — a `# figure …
+//!   same_rig=0 fit=outside` status line, `# error figure: …`, exit 1, not one command sent;
+//! - `clamp`: it plays, every Maestro command inside the figure's pulse range for its channel,
+//!   and the bytes are `mocap play --rig animatronic_demo.toml --policy clamp`'s, clamp report
+//!   included (`# hard_clamp output= ticks= worst_qus=` against the host's `FigureReport`).
+
+use mocap_decoder::Clip;
+use mocap_encoder::encode::CodecChoice;
+use mocap_encoder::play::{servo_clip_stream_on, Policy, Protocol};
+use mocap_tests::snapshot::first_difference;
+use mocap_tests::{
+    data_lines, demo_figure, qemu_available, run_firmware_outcome, servo_demo_clip_for, WIDE_RIG,
+};
+
+/// `m 84 ch lo hi …` lines: every (channel, target ¼ µs).
+fn maestro_commands(lines: &str) -> Vec<(u8, u16)> {
+    let mut commands = Vec::new();
+    for line in lines.lines() {
+        let bytes: Vec<u8> = line
+            .strip_prefix("m")
+            .unwrap_or_else(|| panic!("not a Maestro line: {line}"))
+            .split_whitespace()
+            .map(|h| u8::from_str_radix(h, 16).unwrap())
+            .collect();
+        assert_eq!(bytes.len() % 4, 0, "{line}");
+        for c in bytes.chunks(4) {
+            assert_eq!(c[0], 0x84, "Set Target: {line}");
+            commands.push((c[1], u16::from(c[2]) | u16::from(c[3]) << 7));
+        }
+    }
+    commands
+}
+
+fn host_lines(clip: &Clip<'_>, policy: Policy) -> (String, mocap_encoder::play::FigureReport) {
+    let s = servo_clip_stream_on(clip, &demo_figure(policy), Protocol::Maestro, None).unwrap();
+    let lines = s
+        .ticks
+        .iter()
+        .map(|t| {
+            let mut line = String::from("m");
+            for b in t {
+                line += &format!(" {b:02x}");
+            }
+            line + "\n"
+        })
+        .collect();
+    (lines, s.figure.unwrap())
+}
+
+#[test]
+fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_three_cores() {
+    if !qemu_available() {
+        return;
+    }
+    let (path, bytes) = servo_demo_clip_for("servo-demo-wide", WIDE_RIG, CodecChoice::Index);
+    let clip = Clip::parse(&bytes).unwrap();
+    let figure = demo_figure(Policy::ClampAlways);
+    let (expected, report) = host_lines(&clip, Policy::ClampAlways);
+    assert!(!report.same_rig);
+    assert!(
+        report.clamps.iter().any(|c| c.ticks > 0),
+        "nothing to clamp"
+    );
+    let hard_lines: String = report
+        .clamps
+        .iter()
+        .filter(|c| c.ticks > 0)
+        .map(|c| {
+            format!(
+                "# hard_clamp output={} ticks={} worst_qus={}\n",
+                c.output, c.ticks, c.worst_qus
+            )
+        })
+        .collect();
+
+    for board in &mocap_tests::boards() {
+        for policy in ["refuse", "clamp-if-inside"] {
+            let (ok, uart) =
+                run_firmware_outcome(board, &path, &["--servo", "maestro", "--policy", policy]);
+            assert!(!ok, "{board} {policy}: the wide clip played:\n{uart}");
+            let status = format!("policy={policy} same_rig=0 fit=outside");
+            assert!(
+                uart.lines()
+                    .any(|l| l.starts_with("# figure ") && l.contains(&status)),
+                "{board} {policy}: no `{status}` status line:\n{uart}"
+            );
+            assert!(
+                uart.lines().any(|l| l.starts_with("# error figure: ")
+                    && l.contains("leaves the figure's hard limits")),
+                "{board} {policy}: no typed refusal:\n{uart}"
+            );
+            assert_eq!(data_lines(&uart), "", "{board} {policy}: commands sent");
+            eprintln!("wide clip on {board}, policy {policy}: refused");
+        }
+
+        let (ok, uart) =
+            run_firmware_outcome(board, &path, &["--servo", "maestro", "--policy", "clamp"]);
+        assert!(ok, "{board} clamp: the wide clip did not play:\n{uart}");
+        assert!(
+            uart.contains(" policy=clamp same_rig=0 fit=outside"),
+            "{board}: {uart}"
+        );
+        let data = data_lines(&uart);
+        let mut outside = 0usize;
+        let commands = maestro_commands(&data);
+        for &(channel, target) in &commands {
+            let limit = figure
+                .limits
+                .iter()
+                .find(|l| l.output == u16::from(channel))
+                .unwrap_or_else(|| panic!("{board}: channel {channel} is not the figure's"));
+            outside += usize::from(!(limit.min_qus..=limit.max_qus).contains(&target));
+        }
+        assert_eq!(
+            outside, 0,
+            "{board}: commands outside the figure's hard limits"
+        );
+        assert!(
+            data == expected,
+            "{board}: clamped wide clip differs from mocap play --policy clamp: {}",
+            first_difference(&expected, &data)
+        );
+        let firmware_hard: String = uart
+            .lines()
+            .filter(|l| l.starts_with("# hard_clamp "))
+            .flat_map(|l| [l, "\n"])
+            .collect();
+        assert_eq!(firmware_hard, hard_lines, "{board}: clamp report");
+        eprintln!(
+            "wide clip on {board}, policy clamp: {} commands, 0 outside the figure's limits; {}",
+            commands.len(),
+            hard_lines.trim_end().replace('\n', "; ")
+        );
+    }
+}
