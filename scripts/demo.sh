@@ -30,15 +30,17 @@ else
 fi
 
 # The same clip as an animatronic show: the demo rig's 12 servos coded in servo space, played by
-# the host into Pololu Maestro commands and by the firmware's servo loop on the Cortex-M3; the
-# two byte streams must agree.
+# the host into Pololu Maestro commands and by the firmware's servo loop on the Cortex-M3, both
+# held to the figure's hard limits (the demo rig; the firmware's default MOCAP_FIGURE); the two
+# byte streams must agree.
 mocap_logged "$out/encode_servo.log" "$mocap" encode assets/animatronic_demo.bvh \
     --rig assets/rigs/animatronic_demo.toml --max-error 0.5deg -o "$out/demo_servo.mcb"
-"$mocap" play "$out/demo_servo.mcb" --protocol maestro --output "$out/host.maestro" --fast
+"$mocap" play "$out/demo_servo.mcb" --rig assets/rigs/animatronic_demo.toml --protocol maestro \
+    --output "$out/host.maestro" --fast
 echo "playing the servo clip on Cortex-M3 (QEMU, Maestro output)…" >&2
 bash scripts/firmware.sh run --board lm3s6965 --clip "$out/demo_servo.mcb" --servo maestro --icount \
     >"$out/uart_servo.txt"
-grep '^# servo_ticks' "$out/uart_servo.txt"
+grep -E '^# (figure|hard_clamps|servo_ticks)' "$out/uart_servo.txt"
 # Both as one flat hex string (od is in coreutils).
 fw_hex=$(grep '^m' "$out/uart_servo.txt" | sed 's/^m//' | tr -d ' \n')
 host_hex=$(od -An -v -tx1 "$out/host.maestro" | tr -d ' \n')
