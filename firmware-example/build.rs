@@ -181,7 +181,7 @@ const DEFAULT_FIGURE: &str = "../assets/rigs/animatronic_demo.toml";
 /// `mocap play --policy`). The conversion is the encoder's own (`Figure::from_rig`, the one
 /// `mocap play --rig` applies), so host and firmware hold a clip to the same table:
 /// `FIGURE_SERVOS` (the rig table a clip made for this figure carries), `FIGURE_RATE_MHZ`,
-/// `HARD_LIMITS` (one per output), `POLICY`.
+/// `FIGURE_DIGEST` (its rig digest, SPEC.md §3.6), `HARD_LIMITS` (one per output), `POLICY`.
 fn figure(manifest_dir: &Path, out_dir: &Path) {
     use mocap_encoder::play::{Figure, Policy};
     use mocap_encoder::rig::Rig;
@@ -231,11 +231,14 @@ fn figure(manifest_dir: &Path, out_dir: &Path) {
          pub static FIGURE_SERVOS: [RigServo; {n}] = [\n{servos}];\n\
          /// The figure's hard limits, one per output.\n\
          pub static HARD_LIMITS: [HardLimit; {n}] = [\n{limits}];\n\
+         /// The figure's rig digest (SPEC.md §3.6).\n\
+         pub const FIGURE_DIGEST: u32 = {digest:#010x};\n\
          /// What to do with a clip made for another rig (`MOCAP_POLICY`).\n\
          pub const POLICY: Policy = Policy::{policy:?};\n",
         path = path.display(),
         name = rig.name,
         rate = figure.rate_mhz,
+        digest = figure.digest,
     );
     write_if_changed(&out_dir.join("figure.rs"), code.as_bytes());
 }

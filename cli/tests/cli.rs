@@ -168,4 +168,37 @@ fn play_holds_a_servo_clip_to_the_figure() {
         err.contains("hard limits changed pulses of output"),
         "{err}"
     );
+
+    // The same table, another mechanism (neck_pan's acceleration limit halved): only the rig
+    // digest (SPEC.md §3.6, shown by `mocap info`) tells the clips apart.
+    let slow_toml = toml.replacen("max_accel = 5000.0", "max_accel = 2500.0", 1);
+    assert_ne!(slow_toml, toml);
+    let slow_rig = path("slow.toml");
+    std::fs::write(&slow_rig, slow_toml).expect("write rig");
+    let slow = path("slow.mcb");
+    encode_for(&slow_rig, &slow);
+    let digest = |clip: &str| {
+        let o = mocap(&["info", clip]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let out = text(&o.stdout);
+        out.lines()
+            .find_map(|l| l.strip_prefix("rig digest: "))
+            .map(|l| l[..8].to_string())
+            .unwrap_or_else(|| panic!("no rig digest line:\n{out}"))
+    };
+    assert_ne!(digest(&own), digest(&slow));
+    let o = play(&slow, &["--rig", rig, "--policy", "refuse"]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("refused by the figure's policy"),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = play(&slow, &["--rig", rig]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("another rig digest"),
+        "{}",
+        text(&o.stderr)
+    );
 }

@@ -195,6 +195,18 @@ impl<'a> Clip<'a> {
         self.rig.as_ref()
     }
 
+    /// The digest of the rig a servo clip was encoded for (SPEC.md §3.6, the
+    /// ancillary section `0x80`): `None` without one, or when that section is
+    /// not 4 bytes long (an ancillary section this decoder cannot read is
+    /// skipped, §1). Compare it with [`crate::rig_digest`] of the rig at hand.
+    pub fn rig_digest(&self) -> Option<u32> {
+        let section = self
+            .sections()
+            .find(|s| s.id == consts::SECTION_RIG_DIGEST)?;
+        let bytes: [u8; 4] = section.bytes.try_into().ok()?;
+        Some(u32::from_le_bytes(bytes))
+    }
+
     /// Id of the codec section (SPEC.md §2.2).
     pub fn codec_id(&self) -> u8 {
         self.codec_id

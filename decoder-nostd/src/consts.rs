@@ -23,6 +23,8 @@ pub const SECTION_HEADER_COMPACT: u8 = 0x02;
 pub const SECTION_RIG: u8 = 0x03;
 /// Section id of the `index` codec payload, §4.
 pub const SECTION_CODEC_INDEX: u8 = 0x10;
+/// Rig digest (§3.6): ancillary, the digest of the rig a servo clip was encoded for.
+pub const SECTION_RIG_DIGEST: u8 = 0x80;
 /// Section id of the `pca-spline` codec payload, §5.
 pub const SECTION_CODEC_PCA_SPLINE: u8 = 0x11;
 /// Section id of the `predictive` codec payload, §5b.

@@ -46,7 +46,7 @@ pub use clip::{Clip, Section, Sections};
 pub use error::Error;
 pub use header::{Channel, ChannelIter, ChannelKind, Header, Joint, JointIter, Unit};
 pub use player::Player;
-pub use rig::{tick_count, tick_us, Rig, RigServo};
+pub use rig::{rig_digest, tick_count, tick_us, DigestServo, Rig, RigServo, DIGEST_SERVO_LEN};
 
 /// The fixed-point key-frame spline of the `pca-spline` codec (SPEC.md
 /// §5.4), public so the encoder fits exactly what the decoder evaluates.

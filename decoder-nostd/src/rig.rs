@@ -404,3 +404,65 @@ mod tests {
         assert_eq!(s.line_qus(i64::from(i32::MAX)), None);
     }
 }
+
+/// One servo of a rig as its digest covers it (SPEC.md §3.6): the rig
+/// table's servo and the figure's speed and acceleration limits of its
+/// output (`mocap_servo::HardLimit`; 0 = none).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DigestServo {
+    /// The servo as the rig table holds it.
+    pub servo: RigServo,
+    /// Most the pulse may change per second, ¼ µs/s.
+    pub max_speed_qus_s: u32,
+    /// Most the pulse's speed may change per second, ¼ µs/s².
+    pub max_accel_qus_s2: u32,
+}
+
+/// Bytes of one servo's record in the digest (SPEC.md §3.6).
+pub const DIGEST_SERVO_LEN: usize = 28;
+
+/// The rig digest of SPEC.md §3.6: the CRC-32 (§2.3) of `rate_mhz` and the
+/// servo count as two `u32`s, then per servo, little-endian, `output` (u16),
+/// `angle_lo`, `angle_hi` (i32), `pulse_lo`, `pulse_hi`, `neutral` (u16),
+/// `max_speed` (u32, mdeg/s), `max_speed_qus_s`, `max_accel_qus_s2` (u32).
+/// What a figure and a clip must agree on for the clip to be the figure's:
+/// the rig table and the mechanism's speed and acceleration.
+pub fn rig_digest<I>(rate_mhz: u32, servos: I) -> u32
+where
+    I: IntoIterator<Item = DigestServo>,
+    I::IntoIter: ExactSizeIterator,
+{
+    let servos = servos.into_iter();
+    let mut digest = crate::wire::Crc32Digest::new();
+    digest.update(&rate_mhz.to_le_bytes());
+    let count = u32::try_from(servos.len()).unwrap_or(u32::MAX);
+    digest.update(&count.to_le_bytes());
+    for d in servos {
+        digest.update(&digest_record(&d));
+    }
+    digest.finalize()
+}
+
+fn digest_record(d: &DigestServo) -> [u8; DIGEST_SERVO_LEN] {
+    let s = &d.servo;
+    let mut r = [0u8; DIGEST_SERVO_LEN];
+    let fields: [&[u8]; 9] = [
+        &s.output.to_le_bytes(),
+        &s.angle_lo_mdeg.to_le_bytes(),
+        &s.angle_hi_mdeg.to_le_bytes(),
+        &s.pulse_lo_qus.to_le_bytes(),
+        &s.pulse_hi_qus.to_le_bytes(),
+        &s.neutral_qus.to_le_bytes(),
+        &s.max_speed_mdeg_s.to_le_bytes(),
+        &d.max_speed_qus_s.to_le_bytes(),
+        &d.max_accel_qus_s2.to_le_bytes(),
+    ];
+    let mut at = 0usize;
+    for f in fields {
+        if let Some(slot) = r.get_mut(at..at.wrapping_add(f.len())) {
+            slot.copy_from_slice(f);
+        }
+        at = at.wrapping_add(f.len());
+    }
+    r
+}

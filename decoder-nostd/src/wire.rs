@@ -9,14 +9,42 @@ pub const CRC_ALGORITHM: &crc::Algorithm<u32> = &crc::CRC_32_ISO_HDLC;
 
 /// [`CRC_ALGORITHM`] with a 1 KB table in flash (the `crc-table` feature):
 /// about six times faster than the bitwise form, which costs no table.
-#[cfg(feature = "crc-table")]
-const CRC32: crc::Crc<u32, crc::Table<1>> = crc::Crc::<u32, crc::Table<1>>::new(CRC_ALGORITHM);
-#[cfg(not(feature = "crc-table"))]
-const CRC32: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(CRC_ALGORITHM);
+const CRC32: crc::Crc<u32, CrcImpl> = crc::Crc::<u32, CrcImpl>::new(CRC_ALGORITHM);
 
 /// The CRC-32 of `bytes` (SPEC.md §2.3).
 pub fn crc32(bytes: &[u8]) -> u32 {
     CRC32.checksum(bytes)
+}
+
+/// [`crc32`] over bytes given piece by piece.
+pub struct Crc32Digest(crc::Digest<'static, u32, CrcImpl>);
+
+#[cfg(feature = "crc-table")]
+type CrcImpl = crc::Table<1>;
+#[cfg(not(feature = "crc-table"))]
+type CrcImpl = crc::NoTable;
+
+impl Crc32Digest {
+    /// An empty digest.
+    pub fn new() -> Self {
+        Crc32Digest(CRC32.digest())
+    }
+
+    /// Adds `bytes`.
+    pub fn update(&mut self, bytes: &[u8]) {
+        self.0.update(bytes);
+    }
+
+    /// The CRC of everything added.
+    pub fn finalize(self) -> u32 {
+        self.0.finalize()
+    }
+}
+
+impl Default for Crc32Digest {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// Zigzag: `i32` to the `u32` a varint carries (`(n << 1) ^ (n >> 31)`).

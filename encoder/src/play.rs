@@ -12,7 +12,7 @@ use mocap_servo::{
     ServoLimits,
 };
 
-pub use mocap_servo::{Fit, Policy};
+pub use mocap_servo::{FigureId, Fit, Identity, Policy};
 
 use crate::rig::{Rig, RigError, Servo, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
@@ -128,6 +128,8 @@ pub struct Figure {
     pub limits: Vec<HardLimit>,
     /// What to do with a clip made for another rig.
     pub policy: Policy,
+    /// The figure's rig digest (SPEC.md §3.6, [`Rig::digest`]).
+    pub digest: u32,
 }
 
 impl Figure {
@@ -138,6 +140,16 @@ impl Figure {
             rate_mhz: servo_clip::rate_mhz(rig),
             limits: rig.hard_limits(),
             policy,
+            digest: rig.digest(),
+        }
+    }
+
+    /// The figure's identity, to compare clips with.
+    pub fn id(&self) -> FigureId<'_> {
+        FigureId {
+            rate_mhz: self.rate_mhz,
+            servos: &self.servos,
+            digest: self.digest,
         }
     }
 }
@@ -145,12 +157,19 @@ impl Figure {
 /// How a servo clip played on a figure's hard limits.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct FigureReport {
-    /// The clip's rig table is the figure's own.
-    pub same_rig: bool,
+    /// How the clip's rig compares with the figure's (rig table and digest).
+    pub identity: Identity,
     /// How the clip's servos lie against the hard limits.
     pub fit: Fit,
     /// Per servo, rig order.
     pub clamps: Vec<HardClamps>,
+}
+
+impl FigureReport {
+    /// Whether the clip was made for this figure ([`Identity::is_same`]).
+    pub fn same_rig(&self) -> bool {
+        self.identity.is_same()
+    }
 }
 
 /// What a figure's hard limits did to one servo's pulses.
@@ -252,9 +271,8 @@ pub fn servo_clip_stream_on(
     rate_hz: Option<f64>,
 ) -> Result<ServoStream, PlayError> {
     let t = servo_clip_targets(clip, rate_hz)?;
-    let table_rate = clip.rig().map(|r| r.rate_mhz());
-    let same_rig = figure.servos == t.servos && table_rate == Some(figure.rate_mhz);
-    let on = (figure, same_rig);
+    let identity = figure.id().compare(clip);
+    let on = (figure, identity);
     drive(t.targets, &t.servos, t.rate_mhz, protocol, None, Some(on))
 }
 
@@ -296,16 +314,16 @@ fn drive(
     rate_mhz: u32,
     protocol: Protocol,
     tracks: Option<ServoTracks>,
-    figure: Option<(&Figure, bool)>,
+    figure: Option<(&Figure, Identity)>,
 ) -> Result<ServoStream, PlayError> {
     let mut playback = Playback::<MAX_SERVOS>::new(servos.iter().copied(), rate_mhz)?;
     let mut report = None;
-    if let Some((f, same_rig)) = figure {
+    if let Some((f, identity)) = figure {
         let hard = HardLimits::new(&f.limits);
-        let (p, fit) = playback.with_hard_limits(&hard, same_rig, f.policy)?;
+        let (p, fit) = playback.with_hard_limits(&hard, identity.is_same(), f.policy)?;
         playback = p;
         report = Some(FigureReport {
-            same_rig,
+            identity,
             fit,
             clamps: Vec::new(),
         });

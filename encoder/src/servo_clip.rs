@@ -201,7 +201,7 @@ pub fn servo_header_section(frame_time_ns: u32, frame_count: u32, servos: u32) -
 }
 
 /// `clip` (a coded servo motion) as a servo clip: the rig section added
-/// after the header, and with `names` [`ServoNames::Strip`] the header
+/// after the header, the rig digest (SPEC.md §3.6) at the end, and with `names` [`ServoNames::Strip`] the header
 /// replaced by its servo form.
 pub fn attach_rig(clip: &[u8], rig: &Rig, names: ServoNames) -> Result<Vec<u8>, ServoClipError> {
     let parsed = Clip::parse(clip).map_err(ServoClipError::CodedClipRejected)?;
@@ -224,6 +224,11 @@ pub fn attach_rig(clip: &[u8], rig: &Rig, names: ServoNames) -> Result<Vec<u8>, 
             sections.push((s.id, s.bytes.to_vec()));
         }
     }
+    // Ancillary, last: old decoders skip it.
+    sections.push((
+        consts::SECTION_RIG_DIGEST,
+        rig.digest().to_le_bytes().to_vec(),
+    ));
     let bytes = assemble(&sections);
     Clip::parse(&bytes).map_err(ServoClipError::ServoClipRejected)?;
     Ok(bytes)

@@ -596,13 +596,13 @@ fn a_clip_for_a_wider_rig_stays_inside_the_figures_hard_limits() {
             "{e}"
         );
         let own = servo_clip_stream_on(&own_clip, &figure, Protocol::Maestro, None).unwrap();
-        assert!(own.figure.as_ref().unwrap().same_rig);
+        assert!(own.figure.as_ref().unwrap().identity == mocap_encoder::play::Identity::Same);
     }
 
     let figure = Figure::from_rig(&figure_rig, Policy::ClampAlways);
     let s = servo_clip_stream_on(&wide_clip, &figure, Protocol::Maestro, None).unwrap();
     let report = s.figure.as_ref().unwrap();
-    assert!(!report.same_rig);
+    assert!(report.identity == mocap_encoder::play::Identity::OtherTable);
     assert!(matches!(report.fit, Fit::Outside { .. }));
     assert!(report.clamps.iter().any(|c| c.ticks > 0));
     let steps: Vec<HardStep> = figure

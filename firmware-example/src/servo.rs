@@ -24,7 +24,9 @@ use mocap_decoder::{Clip, Player};
 use mocap_servo::output::{MaestroOutput, Pca9685Output, PwmOutput, ServoOutput, Ssc32Output};
 use mocap_servo::pca9685::{self, Address, Pca9685Servos};
 use mocap_servo::record::{DutyRecorder, I2cRecorder, SerialRecorder};
-use mocap_servo::{ssc32, Fit, HardLimits, OutputError, Playback, PlaybackError, ServoBank};
+use mocap_servo::{
+    ssc32, FigureId, Fit, HardLimits, Identity, OutputError, Playback, PlaybackError, ServoBank,
+};
 
 use crate::config::SERVO;
 use crate::{decoder_glue, instructions, ticks, Failure, Out};
@@ -65,7 +67,7 @@ pub mod figure {
     use mocap_servo::{HardLimit, Policy};
     include!(concat!(env!("OUT_DIR"), "/figure.rs"));
 }
-use figure::{FIGURE_NAME, FIGURE_RATE_MHZ, FIGURE_SERVOS, HARD_LIMITS, POLICY};
+use figure::{FIGURE_DIGEST, FIGURE_NAME, FIGURE_RATE_MHZ, FIGURE_SERVOS, HARD_LIMITS, POLICY};
 
 const _: () = assert!(
     FIGURE_SERVOS.len() <= MAX_SERVOS,
@@ -76,12 +78,12 @@ const _: () = assert!(
 /// limits (`Playback::with_hard_limits`).
 pub const FIGURE: HardLimits<'static> = HardLimits::new(&HARD_LIMITS);
 
-/// Whether a clip's rig table is the figure's own (the same rate and servos).
-fn is_figures(table: &mocap_decoder::Rig<'_>) -> bool {
-    table.rate_mhz() == FIGURE_RATE_MHZ
-        && table.servo_count() == FIGURE_SERVOS.len()
-        && table.servos().zip(&FIGURE_SERVOS).all(|(a, b)| a == *b)
-}
+/// The figure's identity: a clip made for it carries its rig table and its rig digest.
+pub const FIGURE_ID: FigureId<'static> = FigureId {
+    rate_mhz: FIGURE_RATE_MHZ,
+    servos: &FIGURE_SERVOS,
+    digest: FIGURE_DIGEST,
+};
 
 fn playback_failure(e: PlaybackError) -> Failure {
     match e {
@@ -98,11 +100,11 @@ pub fn playback_of(clip: &Clip<'_>, text: &mut Out) -> Result<Rig, Failure> {
     let table = clip
         .rig()
         .ok_or(Failure::Servo("the clip has no rig table"))?;
-    let same = is_figures(table);
+    let identity = FIGURE_ID.compare(clip);
     let rig = Rig::from_rig(table).map_err(playback_failure)?;
-    print_figure(same, FIGURE.fit(rig.servos()), text);
+    print_figure(identity, FIGURE.fit(rig.servos()), text);
     let (rig, _) = rig
-        .with_hard_limits(&FIGURE, same, POLICY)
+        .with_hard_limits(&FIGURE, identity.is_same(), POLICY)
         .map_err(playback_failure)?;
     Ok(rig)
 }
@@ -114,18 +116,22 @@ pub fn figure_playback(text: &mut Out) -> Result<Rig, Failure> {
     let (rig, fit) = rig
         .with_hard_limits(&FIGURE, true, POLICY)
         .map_err(playback_failure)?;
-    print_figure(true, fit, text);
+    print_figure(Identity::Same, fit, text);
     Ok(rig)
 }
 
-/// `# figure name=… servos=… policy=… same_rig=0|1 fit=inside|outside|unknown_output [output=N]`.
-fn print_figure(same: bool, fit: Fit, text: &mut Out) {
+/// `# figure name=… servos=… digest=… policy=… identity=same|same_table|other_table|other_digest
+/// same_rig=0|1 fit=inside|outside|unknown_output [output=N]` (the digest in decimal).
+fn print_figure(identity: Identity, fit: Fit, text: &mut Out) {
     text.str("# figure name=")
         .str(FIGURE_NAME)
         .kv("servos", FIGURE_SERVOS.len() as u64)
+        .kv("digest", u64::from(FIGURE_DIGEST))
         .str(" policy=")
         .str(POLICY.name())
-        .kv("same_rig", u64::from(same));
+        .str(" identity=")
+        .str(identity.name())
+        .kv("same_rig", u64::from(identity.is_same()));
     match fit {
         Fit::Inside => text.str(" fit=inside"),
         Fit::Outside { output } => text.str(" fit=outside").kv("output", u64::from(output)),

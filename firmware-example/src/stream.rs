@@ -52,7 +52,7 @@ use mocap_servo::stream::{
 };
 
 use crate::board::{Rx, CLIP_BUFFER_BYTES};
-use crate::servo::{hex, Driver, Mode, MAX_SERVOS, PLAYER_WORDS};
+use crate::servo::{hex, Driver, Mode, FIGURE_ID, MAX_SERVOS, PLAYER_WORDS};
 use crate::{decoder_glue, ticks, Failure, Out};
 
 /// The receive ring between the UART and the frame receiver.
@@ -559,7 +559,7 @@ impl Mode for Stream {
             let clip = upload
                 .complete(&buffer)
                 .and_then(|bytes| decoder_glue::parse(bytes).ok())
-                .filter(|clip| clip.rig().is_some_and(|rig| driver.rig.matches(rig)));
+                .filter(|clip| FIGURE_ID.compare(clip).is_same());
             let Some(clip) = clip else {
                 // Corrupt or another rig's: forget it, so that a later pass can refill it.
                 upload.reset();

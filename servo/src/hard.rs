@@ -14,7 +14,7 @@
 //! (every output known, every pulse range and neutral inside); the caller
 //! applies its policy ([`Policy`]) with it.
 
-use mocap_decoder::RigServo;
+use mocap_decoder::{DigestServo, RigServo};
 
 use crate::ServoLimits;
 
@@ -115,6 +115,23 @@ impl<'a> HardLimits<'a> {
         self.limits.iter().find(|l| l.output == output)
     }
 
+    /// The rig digest (SPEC.md §3.6) of `servos` at `rate_mhz` with these
+    /// limits' speed and acceleration for their outputs (none for an output
+    /// these limits lack): what a clip made for this figure carries.
+    pub fn digest(&self, rate_mhz: u32, servos: &[RigServo]) -> u32 {
+        mocap_decoder::rig_digest(
+            rate_mhz,
+            servos.iter().map(|&servo| {
+                let hard = self.get(servo.output);
+                DigestServo {
+                    servo,
+                    max_speed_qus_s: hard.map_or(0, |h| h.max_speed_qus_s),
+                    max_accel_qus_s2: hard.map_or(0, |h| h.max_accel_qus_s2),
+                }
+            }),
+        )
+    }
+
     /// Whether `servos` lie inside these limits. An output the figure does not have counts before a range that
     /// leaves the limits.
     pub fn fit(&self, servos: &[RigServo]) -> Fit {
@@ -131,6 +148,71 @@ impl<'a> HardLimits<'a> {
             }
         }
         Fit::Inside
+    }
+}
+
+/// A figure's identity: its rig table (servos at a rate) and its rig digest
+/// (SPEC.md §3.6, [`HardLimits::digest`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FigureId<'a> {
+    /// Tick rate, millihertz.
+    pub rate_mhz: u32,
+    /// The servos as the rig table of a clip made for the figure holds them.
+    pub servos: &'a [RigServo],
+    /// The figure's rig digest.
+    pub digest: u32,
+}
+
+/// How a clip's rig compares with a figure's ([`FigureId::compare`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Identity {
+    /// Made for this figure: its rig table is the figure's and so is its
+    /// rig digest.
+    Same,
+    /// Its rig table is the figure's; it carries no rig digest (encoded
+    /// before the digest existed), so the table is all there is to compare.
+    SameTable,
+    /// Its rig table is another (or it has none).
+    OtherTable,
+    /// Its rig table is the figure's but its digest is not: made for a rig
+    /// with the same table and other speed or acceleration limits.
+    OtherDigest,
+}
+
+impl Identity {
+    /// Whether this counts as made for the figure.
+    pub const fn is_same(self) -> bool {
+        matches!(self, Identity::Same | Identity::SameTable)
+    }
+
+    /// Its name in status lines: `same`, `same_table`, `other_table`, `other_digest`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Identity::Same => "same",
+            Identity::SameTable => "same_table",
+            Identity::OtherTable => "other_table",
+            Identity::OtherDigest => "other_digest",
+        }
+    }
+}
+
+impl FigureId<'_> {
+    /// How `clip` was made relative to this figure: its rig table against
+    /// the figure's (rate and every servo), and its rig digest, when it has
+    /// one, against the figure's.
+    pub fn compare(&self, clip: &mocap_decoder::Clip<'_>) -> Identity {
+        let same_table = clip.rig().is_some_and(|t| {
+            t.rate_mhz() == self.rate_mhz
+                && t.servo_count() == self.servos.len()
+                && t.servos().zip(self.servos).all(|(a, b)| a == *b)
+        });
+        match (same_table, clip.rig_digest()) {
+            (false, _) => Identity::OtherTable,
+            (true, None) => Identity::SameTable,
+            (true, Some(d)) if d == self.digest => Identity::Same,
+            (true, Some(_)) => Identity::OtherDigest,
+        }
     }
 }
 

@@ -71,7 +71,7 @@ mod test_rng;
 
 pub use bank::ServoBank;
 pub use error::{Error, OutputError};
-pub use hard::{Fit, HardLimit, HardLimits, HardStage, HardStep, Policy};
+pub use hard::{FigureId, Fit, HardLimit, HardLimits, HardStage, HardStep, Identity, Policy};
 pub use limits::{Limiter, ServoLimits};
 pub use output::ServoOutput;
 #[cfg(feature = "pca9685")]

@@ -254,6 +254,34 @@ fn golden_servo_clips() {
     }
 }
 
+/// Servo clips as the encoder wrote them before the rig digest (SPEC.md §3.6),
+/// kept as committed (`tests/golden/pre-digest/`): they still decode to
+/// exactly their committed output, carry no digest, and still count as made
+/// for the demo figure by their rig table (`Identity::SameTable`).
+#[test]
+fn pre_digest_servo_clips_keep_decoding() {
+    use mocap_encoder::play::{Figure, Identity, Policy};
+    let dir = golden_dir().join("pre-digest");
+    let figure = Figure::from_rig(
+        &Rig::read_file(&workspace_root().join("assets/rigs/animatronic_demo.toml")).unwrap(),
+        Policy::Refuse,
+    );
+    for codec in ["index", "pca_spline", "predictive"] {
+        let name = format!("servo_{codec}_demo_0.5deg");
+        let bytes = std::fs::read(dir.join(format!("{name}.mcb"))).unwrap();
+        let expected = std::fs::read_to_string(dir.join(format!("{name}.out"))).unwrap();
+        let actual = decoded_report(&bytes);
+        assert!(
+            expected == actual,
+            "pre-digest {name}: the decoder's output changed:\n{}",
+            diff(&expected, &actual)
+        );
+        let clip = Clip::parse(&bytes).unwrap();
+        assert_eq!(clip.rig_digest(), None, "{name}");
+        assert_eq!(figure.id().compare(&clip), Identity::SameTable, "{name}");
+    }
+}
+
 /// Clips encoded from the corpus, pinned by digests of their bytes and of
 /// everything the decoder makes of them.
 #[test]

@@ -62,7 +62,7 @@ fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_three_cores() {
     let clip = Clip::parse(&bytes).unwrap();
     let figure = demo_figure(Policy::ClampAlways);
     let (expected, report) = host_lines(&clip, Policy::ClampAlways);
-    assert!(!report.same_rig);
+    assert_eq!(report.identity, mocap_encoder::play::Identity::OtherTable);
     assert!(
         report.clamps.iter().any(|c| c.ticks > 0),
         "nothing to clamp"
@@ -84,7 +84,7 @@ fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_three_cores() {
             let (ok, uart) =
                 run_firmware_outcome(board, &path, &["--servo", "maestro", "--policy", policy]);
             assert!(!ok, "{board} {policy}: the wide clip played:\n{uart}");
-            let status = format!("policy={policy} same_rig=0 fit=outside");
+            let status = format!("policy={policy} identity=other_table same_rig=0 fit=outside");
             assert!(
                 uart.lines()
                     .any(|l| l.starts_with("# figure ") && l.contains(&status)),
@@ -103,7 +103,7 @@ fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_three_cores() {
             run_firmware_outcome(board, &path, &["--servo", "maestro", "--policy", "clamp"]);
         assert!(ok, "{board} clamp: the wide clip did not play:\n{uart}");
         assert!(
-            uart.contains(" policy=clamp same_rig=0 fit=outside"),
+            uart.contains(" policy=clamp identity=other_table same_rig=0 fit=outside"),
             "{board}: {uart}"
         );
         let data = data_lines(&uart);
@@ -136,6 +136,59 @@ fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_three_cores() {
             "wide clip on {board}, policy clamp: {} commands, 0 outside the figure's limits; {}",
             commands.len(),
             hard_lines.trim_end().replace('\n', "; ")
+        );
+    }
+}
+
+/// The rig digest (SPEC.md §3.6) on the firmware: a clip for the demo rig with neck_pan's
+/// acceleration limit halved has the figure's rig table but another digest. `refuse` refuses
+/// it (`identity=other_digest`); `clamp-if-inside` plays it, every servo being inside the
+/// figure's limits, byte-identical to `mocap play --rig` (which compares the same way).
+#[test]
+fn a_clip_with_the_figures_table_but_another_digest_follows_the_policy_on_three_cores() {
+    if !qemu_available() {
+        return;
+    }
+    let root = mocap_tests::workspace_root();
+    let toml = std::fs::read_to_string(root.join(mocap_tests::DEMO_RIG)).unwrap();
+    let slow = toml.replacen("max_accel = 5000.0", "max_accel = 2500.0", 1);
+    assert_ne!(slow, toml);
+    let dir = root.join("target/qemu-parity");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rig = dir.join("demo_slow_neck.toml");
+    std::fs::write(&rig, slow).unwrap();
+    let (path, bytes) = servo_demo_clip_for(
+        "servo-demo-slow-neck",
+        rig.to_str().unwrap(),
+        CodecChoice::Index,
+    );
+    let clip = Clip::parse(&bytes).unwrap();
+    let (expected, report) = host_lines(&clip, Policy::ClampIfInside);
+    assert_eq!(report.identity, mocap_encoder::play::Identity::OtherDigest);
+    for board in &mocap_tests::boards() {
+        let (ok, uart) =
+            run_firmware_outcome(board, &path, &["--servo", "maestro", "--policy", "refuse"]);
+        assert!(!ok, "{board}: refused under refuse:\n{uart}");
+        assert!(
+            uart.contains(" policy=refuse identity=other_digest same_rig=0 fit=inside"),
+            "{board}: {uart}"
+        );
+        assert_eq!(data_lines(&uart), "", "{board}: commands sent");
+        let (ok, uart) = run_firmware_outcome(board, &path, &["--servo", "maestro"]);
+        assert!(ok, "{board}: clamp-if-inside did not play it:\n{uart}");
+        assert!(
+            uart.contains(" policy=clamp-if-inside identity=other_digest same_rig=0 fit=inside"),
+            "{board}: {uart}"
+        );
+        let data = data_lines(&uart);
+        assert!(
+            data == expected,
+            "{board}: differs from mocap play --rig: {}",
+            first_difference(&expected, &data)
+        );
+        eprintln!(
+            "other-digest clip on {board}: refused under refuse, {} ticks under clamp-if-inside",
+            expected.lines().count()
         );
     }
 }

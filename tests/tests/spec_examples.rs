@@ -221,18 +221,10 @@ fn spec_bytes(name: &str) -> Vec<u8> {
     bytes
 }
 
-/// §3.4.1 and §3.5.1: the encoder writes exactly the examples' bytes, and
-/// a servo clip made of them decodes to the stated servos.
-#[test]
-fn servo_form_and_compact_rig_examples() {
-    use mocap_encoder::container::assemble;
+/// The two-servo rig of §3.5.1's and §3.6's examples.
+fn spec_rig() -> mocap_encoder::rig::Rig {
     use mocap_encoder::rig::Rig;
-    use mocap_encoder::servo_clip::{rig_section, servo_header_section};
-
-    let header = spec_bytes("servo-header");
-    assert_eq!(servo_header_section(20_000_000, 150, 16), header);
-
-    let rig = Rig::parse(
+    Rig::parse(
         r#"
 [rig]
 name = "spec"
@@ -254,7 +246,87 @@ max_speed = 300.0
 "#,
         "spec.toml",
     )
+    .unwrap()
+}
+
+/// §3.6: the digest of §3.5.1's rig is the CRC-32 of the record shown; the encoder writes the
+/// section shown as the servo clip's last section, and `Clip::rig_digest` reads it back. A
+/// `0x80` section of another length is no digest, and a clip without one still parses.
+#[test]
+fn rig_digest_example() {
+    use mocap_encoder::container::assemble;
+    use mocap_encoder::servo_clip::{attach_rig, ServoNames};
+
+    let rig = spec_rig();
+    let record = spec_bytes("rig-digest-record");
+    let section = spec_bytes("rig-digest");
+    assert_eq!(record.len(), 8 + 2 * mocap_decoder::DIGEST_SERVO_LEN);
+    assert_eq!(
+        mocap_decoder::wire::crc32(&record).to_le_bytes().to_vec(),
+        section
+    );
+    assert_eq!(rig.digest().to_le_bytes().to_vec(), section);
+
+    // A one-channel-per-servo coded clip, made a servo clip by the encoder.
+    use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
+    let joint = |name: &str| Joint {
+        name: name.into(),
+        parent: None,
+        offset: [0.0; 3],
+        channels: vec![ChannelKind::Zrotation],
+        end_site: false,
+    };
+    let motion = Motion {
+        skeleton: Skeleton {
+            joints: vec![joint("a"), joint("b")],
+        },
+        frame_time: 0.02,
+        values: vec![10.0, -20.0, 10.0, -20.0],
+    };
+    let coded = mocap_encoder::encode::encode(
+        &motion,
+        &mocap_encoder::encode::EncodeOptions {
+            codec: mocap_encoder::encode::CodecChoice::Index,
+            bound: mocap_encoder::encode::Bound {
+                angle_deg: Some(0.5),
+                position_mm: None,
+                arms_mm: None,
+            },
+            metres_per_unit: 1e-3,
+            key_interval: None,
+        },
+    )
     .unwrap();
+    let bytes = attach_rig(&coded.bytes, &rig, ServoNames::Strip).unwrap();
+    let clip = Clip::parse(&bytes).unwrap();
+    let last = clip.sections().last().unwrap();
+    assert_eq!((last.id, last.bytes), (0x80, section.as_slice()));
+    assert_eq!(clip.rig_digest(), Some(0xc05a_85a0));
+
+    // Without it (as before §3.6) the clip parses and has no digest; a 0x80 section of
+    // another length is skipped.
+    let others: Vec<(u8, Vec<u8>)> = clip
+        .sections()
+        .filter(|s| s.id != 0x80)
+        .map(|s| (s.id, s.bytes.to_vec()))
+        .collect();
+    assert_eq!(Clip::parse(&assemble(&others)).unwrap().rig_digest(), None);
+    let mut odd = others.clone();
+    odd.push((0x80, vec![0xa0, 0x85, 0x5a]));
+    assert_eq!(Clip::parse(&assemble(&odd)).unwrap().rig_digest(), None);
+}
+
+/// §3.4.1 and §3.5.1: the encoder writes exactly the examples' bytes, and
+/// a servo clip made of them decodes to the stated servos.
+#[test]
+fn servo_form_and_compact_rig_examples() {
+    use mocap_encoder::container::assemble;
+    use mocap_encoder::servo_clip::{rig_section, servo_header_section};
+
+    let header = spec_bytes("servo-header");
+    assert_eq!(servo_header_section(20_000_000, 150, 16), header);
+
+    let rig = spec_rig();
     let table = spec_bytes("compact-rig");
     assert_eq!(rig_section(&rig).unwrap(), table);
 

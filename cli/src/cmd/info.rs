@@ -44,6 +44,12 @@ fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
             rig.servo_count(),
             f64::from(rig.rate_mhz()) / 1000.0
         );
+        s += &match clip.rig_digest() {
+            Some(d) => format!(
+                "rig digest: {d:08x} (SPEC.md §3.6; `mocap play --rig figure.toml` and the firmware compare it with the figure's)\n"
+            ),
+            None => "rig digest: none (encoded before SPEC.md §3.6: only the rig table identifies the rig)\n".to_string(),
+        };
     }
     for sec in clip.sections() {
         s += &format!("section {:#04x}: {} bytes\n", sec.id, sec.bytes.len());

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use mocap_encoder::play::{self, Figure, FigureReport, Fit, Policy, Protocol};
+use mocap_encoder::play::{self, Figure, FigureReport, Fit, Identity, Policy, Protocol};
 
 use mocap_encoder::rig::Rig;
 
@@ -103,12 +103,18 @@ pub fn run(a: Args) -> super::Result {
 /// What the figure's hard limits did, for stderr.
 fn figure_text(f: &FigureReport) -> String {
     let mut t = String::from("figure: ");
-    t += match (f.same_rig, f.fit) {
-        (true, _) => "the clip was made for this rig",
-        (false, Fit::Inside) => {
+    t += match (f.identity, f.fit) {
+        (Identity::Same, _) => "the clip was made for this rig (rig table and digest)",
+        (Identity::SameTable, _) => {
+            "the clip was made for this rig (its rig table; it carries no rig digest)"
+        }
+        (Identity::OtherDigest, _) => {
+            "the clip has this rig's table but another rig digest (other speed or acceleration limits): played clamped"
+        }
+        (Identity::OtherTable, Fit::Inside) => {
             "the clip was made for another rig, every servo inside the hard limits"
         }
-        (false, _) => {
+        (Identity::OtherTable, _) => {
             "the clip was made for another rig, which leaves the hard limits: played clamped"
         }
     };

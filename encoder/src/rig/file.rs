@@ -117,6 +117,15 @@ impl Rig {
         self.servos.iter().map(Servo::hard_limit).collect()
     }
 
+    /// The rig's digest (SPEC.md §3.6): its rig table at its rate with its
+    /// hard limits' speeds and accelerations. A servo clip encoded for it
+    /// carries it (section `0x80`); a figure built from it compares it.
+    pub fn digest(&self) -> u32 {
+        let servos: Vec<_> = self.servos.iter().map(Servo::rig_servo).collect();
+        mocap_servo::HardLimits::new(&self.hard_limits())
+            .digest(crate::servo_clip::rate_mhz(self), &servos)
+    }
+
     /// Reads and parses a rig file. I/O errors have line and column 0.
     pub fn read_file(path: &Path) -> Result<Rig, RigError> {
         let file = path.display().to_string();
