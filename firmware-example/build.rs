@@ -10,7 +10,9 @@
 //! `Player::sample_at` at t = 0, P, 2P, … up to and including the first t past its duration.
 //! It reaches src/main.rs as `OUT_DIR/config.rs` (`const SAMPLE_US: u64`, 0 = every frame),
 //! with the servo output (`$MOCAP_SERVO`, `const SERVO`) and the streaming mode
-//! (`$MOCAP_STREAM=1`, `const STREAM`).
+//! (`$MOCAP_STREAM=1`, `const STREAM`), the streaming mode's gap timeout
+//! (`$MOCAP_STREAM_TIMEOUT_MS`, default 500, `const STREAM_TIMEOUT_MS`) and the simulated e-stop
+//! (`$MOCAP_ESTOP_AT_TICK`, `const ESTOP_AT_TICK`).
 //!
 //! The figure — the rig file of the mechanism this firmware drives (`$MOCAP_FIGURE`, default
 //! `../assets/rigs/animatronic_demo.toml`) — becomes `OUT_DIR/figure.rs`: its rig table, its
@@ -159,6 +161,13 @@ fn main() {
     if stream && sample_us != 0 {
         fail("mocap-firmware: MOCAP_STREAM and MOCAP_SAMPLE_US exclude each other");
     }
+    // Faults end at rest (src/stream.rs, src/servo.rs): in the streaming mode, this long without
+    // an accepted frame after the first byte parks every servo (0: hold the last pose however
+    // long the gap); and an e-stop, which QEMU's boards cannot press, simulated at an output
+    // tick (0: never).
+    let timeout_ms = whole_number("MOCAP_STREAM_TIMEOUT_MS", 500);
+    let estop_at_tick = whole_number("MOCAP_ESTOP_AT_TICK", 0);
+
     // ---- the figure: its rig file, compiled into hard limits (src/servo.rs)
     figure(&manifest_dir, &out_dir);
 
@@ -168,9 +177,27 @@ fn main() {
          /// Servo mode (`MOCAP_SERVO`): 0 off, 1 Pololu Maestro, 2 SSC-32, 3 PWM, 4 PCA9685.\n\
          pub const SERVO: u8 = {servo};\n\
          /// Streaming mode (`MOCAP_STREAM=1`).\n\
-         pub const STREAM: bool = {stream};\n"
+         pub const STREAM: bool = {stream};\n\
+         /// Streaming mode: ms without an accepted frame that park the servos; 0 holds the last pose.\n\
+         pub const STREAM_TIMEOUT_MS: u32 = {timeout_ms};\n\
+         /// The output tick at which the simulated e-stop is pressed (`MOCAP_ESTOP_AT_TICK`); 0 never.\n\
+         pub const ESTOP_AT_TICK: u32 = {estop_at_tick};\n"
     );
     write_if_changed(&out_dir.join("config.rs"), config.as_bytes());
+}
+
+/// `$name` as a whole number (unset or empty: `default`).
+fn whole_number(name: &str, default: u32) -> u32 {
+    println!("cargo:rerun-if-env-changed={name}");
+    match env::var(name).as_deref().map(str::trim) {
+        Ok("") | Err(env::VarError::NotPresent) => default,
+        Ok(v) => v.parse().unwrap_or_else(|_| {
+            fail(&format!(
+                "mocap-firmware: {name} must be a whole number (or unset: {default}), got '{v}'"
+            ))
+        }),
+        Err(e) => fail(&format!("mocap-firmware: {name}: {e}")),
+    }
 }
 
 const DEFAULT_FIGURE: &str = "../assets/rigs/animatronic_demo.toml";

@@ -25,6 +25,10 @@
 #       (MOCAP_FIGURE; default assets/rigs/animatronic_demo.toml), --policy
 #       refuse|clamp-if-inside|clamp what it does with a servo clip made for another rig
 #       (MOCAP_POLICY; default clamp-if-inside); see firmware-example/README.md.
+#       --stream-timeout MS: the streaming mode parks the servos after MS without an accepted
+#       frame (MOCAP_STREAM_TIMEOUT_MS; default 500, 0 holds the last pose). --estop-at N
+#       simulates the e-stop input pressed at output tick N (MOCAP_ESTOP_AT_TICK; QEMU's boards
+#       have no button).
 #   scripts/firmware.sh size --board B [--clip PATH.mcb] [--sample-us P] [--servo OUTPUT] [--stream]
 #       Builds, then prints key=value lines: text, data, bss, flash_bytes (text+data),
 #       ram_static_bytes (data+bss), flash_clip_bytes, flash_without_clip_bytes,
@@ -82,6 +86,8 @@ STREAM=""
 INPUT=/dev/null
 FIGURE="$MOCAP_REPO_ROOT/assets/rigs/animatronic_demo.toml"
 POLICY=""
+STREAM_TIMEOUT=""
+ESTOP_AT=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
@@ -99,6 +105,10 @@ while [ "$#" -gt 0 ]; do
         --figure=*) FIGURE="${1#*=}"; shift ;;
         --policy) [ "$#" -ge 2 ] || die "--policy needs a value"; POLICY="$2"; shift 2 ;;
         --policy=*) POLICY="${1#*=}"; shift ;;
+        --stream-timeout) [ "$#" -ge 2 ] || die "--stream-timeout needs a value"; STREAM_TIMEOUT="$2"; shift 2 ;;
+        --stream-timeout=*) STREAM_TIMEOUT="${1#*=}"; shift ;;
+        --estop-at) [ "$#" -ge 2 ] || die "--estop-at needs a tick"; ESTOP_AT="$2"; shift 2 ;;
+        --estop-at=*) ESTOP_AT="${1#*=}"; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -124,6 +134,8 @@ TARGET="$(board_target "$BOARD")"
     && die "run --stream needs --input FILE (e.g. from: mocap send CLIP --output FILE --fast)"
 [ -n "$STREAM" ] && [ -n "$SAMPLE_US" ] && die "--stream and --sample-us exclude each other"
 [ -r "$FIGURE" ] || die "--figure: cannot read $FIGURE"
+[ -z "$STREAM_TIMEOUT" ] || [[ "$STREAM_TIMEOUT" =~ ^[0-9]+$ ]] || die "--stream-timeout must be a whole number of ms"
+[ -z "$ESTOP_AT" ] || [[ "$ESTOP_AT" =~ ^[0-9]+$ ]] || die "--estop-at must be a whole number of ticks"
 case "$POLICY" in
     ""|refuse|clamp-if-inside|clamp) ;;
     *) die "--policy must be refuse, clamp-if-inside or clamp, got '$POLICY'" ;;
@@ -172,7 +184,7 @@ build() {
 
     target_dir="$FW/target/$BOARD"
     elf_dir="$target_dir/elf"
-    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}.elf"
+    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/$BOARD.lock"
     # One build per board at a time; the ELF is copied out under the lock.
@@ -180,7 +192,8 @@ build() {
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
         MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
-            MOCAP_FIGURE="$staged_figure" MOCAP_POLICY="$POLICY" CARGO_TARGET_DIR="$target_dir" \
+            MOCAP_FIGURE="$staged_figure" MOCAP_POLICY="$POLICY" \
+            MOCAP_STREAM_TIMEOUT_MS="$STREAM_TIMEOUT" MOCAP_ESTOP_AT_TICK="$ESTOP_AT" CARGO_TARGET_DIR="$target_dir" \
             mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"

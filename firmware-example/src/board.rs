@@ -66,6 +66,8 @@ mod imp {
 
     /// 64 KB of RAM: 32 KB for a streamed clip.
     pub const CLIP_BUFFER_BYTES: usize = 32 * 1024;
+    /// SysTick (core clock source) ticks per second: QEMU's lm3s6965evb core clock.
+    pub const SYSTICK_HZ: u32 = 12_500_000;
 
     pub fn read_byte() -> Option<u8> {
         if read_reg(FR) & FR_RXFE != 0 {
@@ -117,6 +119,8 @@ mod imp {
 
     /// 16 KB of RAM: 6 KB for a streamed clip (the rest is the stack, about 6 KB).
     pub const CLIP_BUFFER_BYTES: usize = 6 * 1024;
+    /// SysTick (core clock source) ticks per second: the nRF51's 16 MHz core clock.
+    pub const SYSTICK_HZ: u32 = 16_000_000;
 
     pub fn read_byte() -> Option<u8> {
         if read_reg(EVENTS_RXDRDY) == 0 {
@@ -187,6 +191,8 @@ mod imp {
 
     /// 4 MB of RAM: 64 KB for a streamed clip.
     pub const CLIP_BUFFER_BYTES: usize = 64 * 1024;
+    /// SysTick (core clock source) ticks per second: the MPS2's 25 MHz core clock.
+    pub const SYSTICK_HZ: u32 = 25_000_000;
 
     pub fn read_byte() -> Option<u8> {
         if read_reg(STATE) & STATE_RX_FULL == 0 {
@@ -225,4 +231,4 @@ mod imp {
 )))]
 compile_error!("enable one board feature: board-lm3s6965, board-microbit or board-mps2-an386");
 
-pub use imp::{Uart, CLIP_BUFFER_BYTES, NAME};
+pub use imp::{Uart, CLIP_BUFFER_BYTES, NAME, SYSTICK_HZ};

@@ -195,6 +195,8 @@ enum Failure {
     Decoder(&'static str, Error),
     Servo(&'static str),
     ServoCrate(&'static str, mocap_servo::Error),
+    /// The e-stop was pressed (the caller parks the servos).
+    EStop,
     /// The figure refuses the clip (made for another rig, by the policy; or an output it lacks).
     Figure(mocap_servo::PlaybackError),
     FrameIndex {
@@ -458,6 +460,9 @@ fn report(text: &mut Out, failure: &Failure) {
             text.str("# error servo ").str(what).str(": ");
             let _ = core::fmt::write(&mut FmtAdapter(text), format_args!("{error}"));
             text.nl();
+        }
+        Failure::EStop => {
+            text.str("# error estop").nl();
         }
         Failure::Figure(error) => {
             text.str("# error figure: ");

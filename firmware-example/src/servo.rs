@@ -28,7 +28,7 @@ use mocap_servo::{
     ssc32, FigureId, Fit, HardLimits, Identity, OutputError, Playback, PlaybackError, ServoBank,
 };
 
-use crate::config::SERVO;
+use crate::config::{ESTOP_AT_TICK, SERVO};
 use crate::{decoder_glue, instructions, ticks, Failure, Out};
 
 /// Most servos of a rig in this firmware (as many as a streamed `Pose` carries).
@@ -173,12 +173,18 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
     /// One tick towards `targets` (¼ µs, rig order): the limiter, then the output. The tick's
     /// time counts from `start` (SysTick read by the caller before its own work), the
     /// printing of its line does not.
+    ///
+    /// [`Failure::EStop`] once the e-stop is pressed ([`estop_pressed`]): nothing is commanded;
+    /// the caller parks ([`park_after`](Self::park_after)).
     pub fn command(
         &mut self,
         targets: &[u16; MAX_SERVOS],
         start: u32,
         text: &mut Out,
     ) -> Result<(), Failure> {
+        if estop_pressed(self.stats.ticks) {
+            return Err(Failure::EStop);
+        }
         self.rig
             .limit(targets)
             .map_err(|e| Failure::ServoCrate("limiter", e))?;
@@ -208,10 +214,29 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
         self.command(&targets, start, text)
     }
 
-    /// Returns every servo to neutral at its speed limit (nothing when already there).
-    pub fn park(&mut self, text: &mut Out) -> Result<(), Failure> {
+    /// Returns every servo to neutral at its speed limit (nothing when already there); the
+    /// ticks it took.
+    pub fn park(&mut self, text: &mut Out) -> Result<u32, Failure> {
         let show = &mut self.show;
-        self.rig.park(&mut self.output, |_| show(text))
+        let mut n = 0u32;
+        self.rig.park(&mut self.output, |_| {
+            n = n.saturating_add(1);
+            show(text)
+        })?;
+        Ok(n)
+    }
+
+    /// After `fault`: every servo to neutral at its speed (and, with the figure's hard limits,
+    /// acceleration) limit, then `# fault=<name> park_ticks=<n> park_ms=<n>`.
+    pub fn park_after(&mut self, fault: Fault, text: &mut Out) -> Result<(), Failure> {
+        let n = self.park(text)?;
+        let mhz = u64::from(self.rig.rate_mhz().max(1));
+        text.str("# fault=")
+            .str(fault.name())
+            .kv("park_ticks", u64::from(n))
+            .kv("park_ms", u64::from(n) * 1_000_000 / mhz)
+            .nl();
+        Ok(())
     }
 
     /// What the figure's hard limits changed: `# hard_clamp output= ticks= worst_qus=` per
@@ -266,6 +291,35 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
             )
             .nl();
     }
+}
+
+/// What brings the servos to rest before the motion ends.
+#[derive(Clone, Copy)]
+pub enum Fault {
+    /// No accepted frame for `STREAM_TIMEOUT_MS` (a cut cable, a host that stopped).
+    StreamTimeout,
+    /// The decoder refused the clip while it played.
+    DecodeError,
+    /// The e-stop input.
+    EStop,
+}
+
+impl Fault {
+    pub fn name(self) -> &'static str {
+        match self {
+            Fault::StreamTimeout => "stream_timeout",
+            Fault::DecodeError => "decode_error",
+            Fault::EStop => "estop",
+        }
+    }
+}
+
+/// Whether the e-stop input is pressed before output tick `tick` (0-based). On a board this
+/// reads the e-stop pin; QEMU's boards have no input a test can press, so the build simulates
+/// a press at output tick `MOCAP_ESTOP_AT_TICK` (1-based; 0 = never). Once pressed it stays
+/// pressed: the firmware parks and ends its run.
+fn estop_pressed(tick: u64) -> bool {
+    ESTOP_AT_TICK != 0 && tick >= u64::from(ESTOP_AT_TICK).saturating_sub(1)
 }
 
 impl<E> From<OutputError<E>> for Failure {
@@ -417,9 +471,26 @@ impl Mode for FlashClip<'_> {
             .kv("ticks", n_ticks)
             .nl();
         let mut angles = [0i32; PLAYER_WORDS];
+        let mut failed = None;
         for i in 0..n_ticks {
             let t_us = driver.rig.tick_us(i);
-            driver.clip_tick(&mut player, t_us, &mut angles, text)?;
+            match driver.clip_tick(&mut player, t_us, &mut angles, text) {
+                Ok(()) => {}
+                // Faults end at rest: park first, then report.
+                Err(Failure::EStop) => {
+                    driver.park_after(Fault::EStop, text)?;
+                    break;
+                }
+                Err(e @ Failure::Decoder(..)) => {
+                    driver.park_after(Fault::DecodeError, text)?;
+                    failed = Some(e);
+                    break;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        if let Some(e) = failed {
+            return Err(e);
         }
         driver.park(text)?;
         driver.print_hard_clamps(text);

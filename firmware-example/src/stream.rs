@@ -31,6 +31,14 @@
 //! - **Stop** (or the end of a clip played without `loop_`, or a decoder error in it) returns
 //!   every servo to neutral at its speed limit; a `Pose`, `Stop` or `Hello` during playback
 //!   interrupts it.
+//! - **Faults end at rest.** No accepted frame for `STREAM_TIMEOUT_MS` (build option
+//!   `MOCAP_STREAM_TIMEOUT_MS`, default 500 ms; 0 holds the last pose however long the gap)
+//!   once the first byte has arrived — a cut cable, a host that stopped, a line so corrupt that
+//!   nothing gets through — parks every servo at its speed and acceleration limits and ends the
+//!   session; up to then a gap holds the last pose. A decoder error in the playing clip and the
+//!   e-stop do the same. Each prints `# fault=stream_timeout|decode_error|estop park_ticks=
+//!   park_ms=` after the park. (An uploaded clip plays from RAM: a cut cable while it plays
+//!   does not stop it; it ends at rest.)
 //! - **Status** frames (`Status { received, dropped, last_seq, state, chunks }`, state
 //!   [`State`], `chunks` the distinct chunks of the upload) go back in reply to `Hello`, after
 //!   every `Play` (accepted, armed or refused) and when an armed `Play` starts the clip, every
@@ -51,9 +59,13 @@ use mocap_servo::stream::{
     PROTOCOL_VERSION,
 };
 
-use crate::board::{Rx, CLIP_BUFFER_BYTES};
-use crate::servo::{hex, Driver, Mode, FIGURE_ID, MAX_SERVOS, PLAYER_WORDS};
+use crate::board::{Rx, CLIP_BUFFER_BYTES, SYSTICK_HZ};
+use crate::config::STREAM_TIMEOUT_MS;
+use crate::servo::{hex, Driver, Fault, Mode, FIGURE_ID, MAX_SERVOS, PLAYER_WORDS};
 use crate::{decoder_glue, ticks, Failure, Out};
+
+/// SysTick ticks without an accepted frame that end the session at rest (`STREAM_TIMEOUT_MS`).
+const TIMEOUT_TICKS: u64 = STREAM_TIMEOUT_MS as u64 * SYSTICK_HZ as u64 / 1000;
 
 /// The receive ring between the UART and the frame receiver.
 pub const RING_BYTES: usize = 64;
@@ -153,6 +165,8 @@ struct Link {
     decode_ticks: u64,
     /// Frames ended, accepted or dropped (not the empty ones).
     frames_ended: u32,
+    /// Waits that ended in the gap timeout.
+    timeouts: u32,
 }
 
 impl Link {
@@ -171,6 +185,7 @@ impl Link {
             resync_frames_max: 0,
             decode_ticks: 0,
             frames_ended: 0,
+            timeouts: 0,
         }
     }
 
@@ -238,11 +253,23 @@ impl Link {
         }
     }
 
-    /// Waits for the next accepted message.
-    fn wait(&mut self) -> Event {
+    /// Waits for the next accepted message; `None` once [`TIMEOUT_TICKS`] SysTick ticks pass
+    /// without one after the first byte has arrived (never with `STREAM_TIMEOUT_MS` = 0).
+    /// Corrupt frames do not count: only an accepted frame is a sign of life.
+    fn wait(&mut self) -> Option<Event> {
+        let mut idle = 0u64;
+        let mut last = ticks::now();
         loop {
             if let Some(event) = self.poll() {
-                return event;
+                return Some(event);
+            }
+            // One SysTick wrap at most between two reads: a poll is far shorter.
+            let now = ticks::now();
+            idle = idle.saturating_add(u64::from(ticks::since(last, now)));
+            last = now;
+            if TIMEOUT_TICKS != 0 && self.bytes != 0 && idle >= TIMEOUT_TICKS {
+                self.timeouts += 1;
+                return None;
             }
         }
     }
@@ -424,6 +451,8 @@ enum Played {
     Interrupted(Event),
     /// The decoder refused the clip (a valid CRC does not make valid codec data).
     Failed,
+    /// The e-stop was pressed.
+    EStop,
 }
 
 /// Plays `clip` (the upload's) from tick 0 (again and again when `looped`), taking frames
@@ -447,6 +476,7 @@ fn play<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
             let t_us = driver.rig.tick_us(i);
             match driver.clip_tick(&mut player, t_us, &mut angles, text) {
                 Err(Failure::Decoder(..)) => return Ok(Played::Failed),
+                Err(Failure::EStop) => return Ok(Played::EStop),
                 other => other?,
             }
             session.ticked(link, upload, text)?;
@@ -497,6 +527,8 @@ impl Mode for Stream {
             .kv("bitmap_words", BITMAP_WORDS as u64)
             .kv("ring_bytes", RING_BYTES as u64)
             .kv("status_every_ticks", u64::from(STATUS_EVERY_TICKS))
+            .kv("timeout_ms", u64::from(STREAM_TIMEOUT_MS))
+            .kv("park_ticks_max", u64::from(driver.rig.park_ticks_max()))
             .nl();
         send(
             text,
@@ -505,10 +537,18 @@ impl Mode for Stream {
             },
         )?;
         let mut pending = None;
+        // What ended the session early, if anything: the servos then park after it.
+        let mut fault = None;
         loop {
             let event = match pending.take() {
                 Some(event) => event,
-                None => link.wait(),
+                None => match link.wait() {
+                    Some(event) => event,
+                    None => {
+                        fault = Some(Fault::StreamTimeout);
+                        break;
+                    }
+                },
             };
             // `Some(loop_)`: play the upload now (a `Play`, or the chunk that completes an
             // upload with an armed `Play`).
@@ -544,7 +584,13 @@ impl Mode for Stream {
                 },
                 Event::Pose { seq, pulses } => {
                     upload.disarm();
-                    s.pose(seq, &pulses, driver, &link, &upload, text)?;
+                    match s.pose(seq, &pulses, driver, &link, &upload, text) {
+                        Err(Failure::EStop) => {
+                            fault = Some(Fault::EStop);
+                            break;
+                        }
+                        other => other?,
+                    }
                     None
                 }
                 Event::Stop => break,
@@ -580,12 +626,22 @@ impl Mode for Stream {
                 Played::Ended => break,
                 Played::Failed => {
                     s.clips_failed += 1;
+                    fault = Some(Fault::DecodeError);
+                    break;
+                }
+                Played::EStop => {
+                    fault = Some(Fault::EStop);
                     break;
                 }
             }
         }
         s.live = None;
-        driver.park(text)?;
+        match fault {
+            Some(fault) => driver.park_after(fault, text)?,
+            None => {
+                driver.park(text)?;
+            }
+        }
         s.state = State::Idle;
         s.status(&link, &upload, text)?;
         report(&link, &s, driver, self.calibration_ticks, text);
@@ -609,6 +665,7 @@ fn report<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
         .kv("resync_bytes_total", u64::from(link.resync_bytes))
         .kv("resync_bytes_max", u64::from(link.resync_bytes_max))
         .kv("resync_frames_max", u64::from(link.resync_frames_max))
+        .kv("timeouts", u64::from(link.timeouts))
         .kv(
             "decode_per_frame",
             crate::instructions(link.decode_ticks, calibration_ticks)

@@ -242,6 +242,27 @@ impl HardStep {
         max_accel_qus: 0,
     };
 
+    /// An upper bound on the ticks [`step`](Self::step) towards neutral
+    /// takes to bring the servo to neutral, at rest, from any position in
+    /// its range at any speed it can have there: ⌈span / v⌉ + 1 without an
+    /// acceleration limit, ⌈span / v⌉ + 2·⌈v / a⌉ + 2 with one (braking from
+    /// full speed, then accelerating again), with `v` the speed limit (the
+    /// span when there is none) and `a` the acceleration limit, per tick.
+    pub fn park_ticks_max(&self) -> u32 {
+        let span = u32::from(self.max_qus.saturating_sub(self.min_qus)).max(1);
+        let v = match self.max_step_qus {
+            0 => span,
+            v => u32::from(v),
+        };
+        let travel = span.div_ceil(v);
+        match self.max_accel_qus {
+            0 => travel.saturating_add(1),
+            a => travel
+                .saturating_add(v.div_ceil(u32::from(a)).saturating_mul(2))
+                .saturating_add(2),
+        }
+    }
+
     /// `limit` at `rate_mhz` ticks per 1000 s: its speed as ¼ µs per tick
     /// (rounded down, at least 1 when limited) and its acceleration as ¼ µs
     /// per tick per tick (the same). A neutral outside the range is moved
@@ -444,6 +465,16 @@ impl<const N: usize> HardStage<N> {
         parked
     }
 
+    /// The most ticks [`stop_step`](Self::stop_step) needs from any state
+    /// ([`HardStep::park_ticks_max`] of the slowest servo).
+    pub fn park_ticks_max(&self) -> u32 {
+        self.steps
+            .iter()
+            .map(HardStep::park_ticks_max)
+            .max()
+            .unwrap_or(0)
+    }
+
     /// Whether every servo is at its neutral, at rest.
     pub fn parked(&self) -> bool {
         self.pos
@@ -524,7 +555,7 @@ mod tests {
     #[test]
     fn random_targets_stay_inside_every_limit() {
         let mut rng = TestRng::new(7);
-        for _ in 0..200 {
+        for _ in 0..2000 {
             let a = rng.next_u16();
             let b = rng.next_u16();
             let (min, max) = if a <= b { (a, b) } else { (b, a) };
@@ -551,6 +582,27 @@ mod tests {
                     );
                 }
                 (p, v) = (n, nv);
+            }
+            // Then on its way to the end farther from neutral, at speed, for a while; from
+            // there, neutral within the bound.
+            let far = if step.neutral_qus - min > max - step.neutral_qus {
+                min
+            } else {
+                max
+            };
+            let (mut q, mut w) = (p, v);
+            for _ in 0..rng.next_u16() % 300 {
+                (q, w) = step.step(q, w, far);
+            }
+            let (start, speed) = (q, w);
+            let mut ticks = 0;
+            while (q, w) != (step.neutral_qus, 0) {
+                (q, w) = step.step(q, w, step.neutral_qus);
+                ticks += 1;
+                assert!(
+                    ticks <= step.park_ticks_max(),
+                    "{step:?} from {start} at {speed}"
+                );
             }
             // A held target is reached and held, at rest.
             let target = rng.next_u16();

@@ -300,6 +300,28 @@ impl<const N: usize> Playback<N> {
         Ok(parked)
     }
 
+    /// The most ticks a return to rest ([`park`](Self::park)) takes from
+    /// any state: with the figure's hard limits theirs
+    /// ([`HardStage::park_ticks_max`]), else ⌈span / step⌉ + 1 of the
+    /// slowest servo of the clip's limits.
+    pub fn park_ticks_max(&self) -> u32 {
+        if let Some(hard) = &self.hard {
+            return hard.park_ticks_max();
+        }
+        self.limits()
+            .iter()
+            .map(|l| {
+                let span = u32::from(l.max_qus.saturating_sub(l.min_qus)).max(1);
+                let step = match l.max_step_qus {
+                    0 => span,
+                    s => u32::from(s),
+                };
+                span.div_ceil(step).saturating_add(1)
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
     /// Whether every servo was last commanded its neutral (true before the
     /// first tick).
     pub fn parked(&self) -> bool {

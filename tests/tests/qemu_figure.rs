@@ -192,3 +192,83 @@ fn a_clip_with_the_figures_table_but_another_digest_follows_the_policy_on_three_
         );
     }
 }
+
+/// The e-stop (simulated: QEMU's boards have no button, `firmware.sh --estop-at N`): the demo
+/// figure's own clip, e-stop pressed at output tick 100. The firmware sends the 99 ticks
+/// `mocap play --rig` sends, then nothing but the return to rest: every step inside the
+/// figure's pulse ranges and speed limits, ending at its neutrals, in at most the documented
+/// number of ticks (`Playback::park_ticks_max`), and says `# fault=estop park_ticks=N`.
+#[test]
+fn the_estop_brings_every_servo_to_rest_on_three_cores() {
+    use mocap_servo::{HardLimits, HardStep, Playback};
+    if !qemu_available() {
+        return;
+    }
+    const AT: usize = 100;
+    let (path, bytes) = servo_demo_clip_for(
+        "servo-demo-estop",
+        mocap_tests::DEMO_RIG,
+        CodecChoice::Index,
+    );
+    let clip = Clip::parse(&bytes).unwrap();
+    let figure = demo_figure(Policy::ClampIfInside);
+    let (expected, _) = host_lines(&clip, Policy::ClampIfInside);
+    let (playback, _) = Playback::<32>::new(figure.servos.iter().copied(), figure.rate_mhz)
+        .unwrap()
+        .with_hard_limits(&HardLimits::new(&figure.limits), true, figure.policy)
+        .unwrap();
+    let park_max = playback.park_ticks_max() as usize;
+    let steps: Vec<HardStep> = figure
+        .limits
+        .iter()
+        .map(|l| HardStep::at_rate(l, figure.rate_mhz))
+        .collect();
+    let before: String = expected
+        .lines()
+        .take(AT - 1)
+        .flat_map(|l| [l, "\n"])
+        .collect();
+    for board in &mocap_tests::boards() {
+        let at = AT.to_string();
+        let (ok, uart) =
+            run_firmware_outcome(board, &path, &["--servo", "maestro", "--estop-at", &at]);
+        assert!(ok, "{board}: {uart}");
+        let data = data_lines(&uart);
+        assert!(
+            data.starts_with(&before),
+            "{board}: before the e-stop: {}",
+            first_difference(&before, &data)
+        );
+        let park = &data[before.len()..];
+        let n = park.lines().count();
+        assert!(
+            uart.contains(&format!("# fault=estop park_ticks={n} ")),
+            "{board}: {uart}"
+        );
+        assert!(
+            n <= park_max,
+            "{board}: {n} ticks to rest, documented {park_max}"
+        );
+        let commands = maestro_commands(&data);
+        let per_tick = steps.len();
+        let mut prev: Vec<u16> = commands[(AT - 2) * per_tick..(AT - 1) * per_tick]
+            .iter()
+            .map(|c| c.1)
+            .collect();
+        for tick in commands[(AT - 1) * per_tick..].chunks(per_tick) {
+            for ((&(_, p), h), last) in tick.iter().zip(&steps).zip(&mut prev) {
+                assert!((h.min_qus..=h.max_qus).contains(&p), "{board}");
+                if h.max_step_qus > 0 {
+                    assert!(p.abs_diff(*last) <= h.max_step_qus, "{board}: too fast");
+                }
+                *last = p;
+            }
+        }
+        let neutral: Vec<u16> = steps.iter().map(|h| h.neutral_qus).collect();
+        assert_eq!(prev, neutral, "{board}: not at rest");
+        eprintln!(
+            "e-stop at tick {AT} on {board}: at rest after {n} ticks ({} ms; documented at most {park_max})",
+            n as u64 * 1_000_000 / u64::from(figure.rate_mhz)
+        );
+    }
+}

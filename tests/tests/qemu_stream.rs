@@ -44,7 +44,7 @@ use mocap_servo::stream::{
     decode_frame, encode_frame, FrameReceiver, Message, MAX_CHUNK_LEN, MAX_FRAME_LEN,
     PROTOCOL_VERSION,
 };
-use mocap_servo::{HardLimits, Playback, ServoLimits};
+use mocap_servo::{HardLimits, HardStep, Playback, ServoLimits};
 use mocap_tests::snapshot::check_snapshot;
 use mocap_tests::{demo_figure, qemu_available, run_firmware, servo_demo_clip, workspace_root};
 
@@ -354,7 +354,12 @@ fn run_stream(board: &str, clip: &Path, input: &Path) -> Run {
     }
     let figures = uart
         .lines()
-        .filter(|l| l.starts_with("# link") || l.starts_with("# session"))
+        .filter(|l| {
+            l.starts_with("# link")
+                || l.starts_with("# session")
+                || l.starts_with("# mode=stream")
+                || l.starts_with("# fault=")
+        })
         .collect::<Vec<_>>()
         .join(" ");
     Run {
@@ -569,6 +574,15 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
     let played = servo_clip_stream_on(&clip, &figure, Protocol::Maestro, None).unwrap();
     let expected = maestro_lines(&played);
     let limits = played.limits.clone();
+    // The figure's hard limits at its rate, as a limiter's: every command inside them too.
+    let hard: Vec<ServoLimits> = figure
+        .limits
+        .iter()
+        .map(|l| {
+            let h = HardStep::at_rate(l, figure.rate_mhz);
+            ServoLimits::new(h.min_qus, h.max_qus, h.neutral_qus, h.max_step_qus).unwrap()
+        })
+        .collect();
 
     let upload: Vec<u8> = clip_frames(&clip_bytes, false, 1).unwrap().concat();
     let carousel: Vec<u8> = clip_frames(&clip_bytes, false, CAROUSEL_PASSES)
@@ -584,6 +598,20 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
         "the carousel's first pass is hit as the one-pass upload"
     );
     let (poses_bad, poses_hits) = corrupt(&poses, 0x5EED_0002);
+    // Heavier corruption, and cut cables: the stream stops mid-frame (no `Stop`), and the
+    // firmware's gap timeout parks the servos.
+    let (poses_10, poses_10_hits) = corrupt_one_in(&poses, 0x5EED_0010, 10);
+    let (poses_50, poses_50_hits) = corrupt_one_in(&poses, 0x5EED_0050, 2);
+    let (upload_10, upload_10_hits) = corrupt_one_in(&upload, 0x5EED_0011, 10);
+    let (upload_50, upload_50_hits) = corrupt_one_in(&upload, 0x5EED_0051, 2);
+    let cut = |bytes: &[u8], fraction: f64| {
+        // Past a delimiter, into the next frame: mid-frame.
+        let at = (bytes.len() as f64 * fraction) as usize;
+        let next = at + bytes[at..].iter().position(|&b| b == 0).unwrap();
+        bytes[..next + 3].to_vec()
+    };
+    let poses_cut = cut(&poses, 0.4);
+    let upload_cut = cut(&upload, 0.5);
     let input = |name, bytes, hits, poses, same_rig| Input {
         name,
         bytes,
@@ -618,6 +646,36 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
             true,
         ),
         input("poses-1pct", then_stop(poses_bad), poses_hits, true, true),
+        input(
+            "poses-10pct",
+            then_stop(poses_10),
+            poses_10_hits,
+            true,
+            true,
+        ),
+        input(
+            "poses-50pct",
+            then_stop(poses_50),
+            poses_50_hits,
+            true,
+            true,
+        ),
+        input(
+            "upload-10pct",
+            then_stop(upload_10),
+            upload_10_hits,
+            false,
+            true,
+        ),
+        input(
+            "upload-50pct",
+            then_stop(upload_50),
+            upload_50_hits,
+            false,
+            true,
+        ),
+        input("poses-cut", poses_cut, 0, true, true),
+        input("upload-cut", upload_cut, 0, false, true),
         input(
             "motion-clip",
             then_stop(clip_frames(&motion, false, 1).unwrap().concat()),
@@ -681,6 +739,25 @@ fn streamed_clips_and_poses_play_like_mocap_play_and_survive_corruption() {
                 "{what}"
             );
             check_safe(&what, &run.ticks, &limits);
+            check_safe(&format!("{what} (hard limits)"), &run.ticks, &hard);
+            if name.ends_with("-cut") {
+                // A cut cable: the gap timeout, then neutral at the speed limits within the
+                // documented time (STREAM_TIMEOUT_MS + park_ticks_max ticks).
+                let timeout_ms = run.figure("timeout_ms");
+                let park_ticks = run.figure("park_ticks");
+                let park_max = run.figure("park_ticks_max");
+                assert_eq!(run.figure("timeouts"), 1, "{what}: no gap timeout");
+                assert!(
+                    park_ticks <= park_max,
+                    "{what}: parked in {park_ticks} ticks, documented at most {park_max}"
+                );
+                eprintln!(
+                    "{what}: cable cut; {timeout_ms} ms timeout, neutral after {park_ticks} ticks \
+                     ({} ms; documented at most {park_max} ticks = {} ms)",
+                    run.figure("park_ms"),
+                    park_max * 1_000_000 / u64::from(figure.rate_mhz)
+                );
+            }
             if *is_poses {
                 let received = host_receive(bytes);
                 let (text, [applied, missing, stale]) = expected_pose_run(&received, &figure);
