@@ -63,6 +63,10 @@ fn run(cli: Cli) -> cmd::Result {
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<cmd::Stopped>() => {
+            eprintln!("mocap: stopped: {e}");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("mocap: error: {e}");
             ExitCode::FAILURE

@@ -202,3 +202,95 @@ fn play_holds_a_servo_clip_to_the_figure() {
         text(&o.stderr)
     );
 }
+
+/// `mocap play` stopped by Ctrl-C (SIGINT) mid-clip: it sends what it would have sent up to
+/// there, then brings every servo back to rest at its speed limits, and exits 130 saying so.
+#[test]
+fn play_stopped_by_ctrl_c_returns_the_servos_to_rest() {
+    let d = out_dir("stop");
+    let path = |n: &str| d.join(n).to_str().expect("utf-8 path").to_owned();
+    let rig = "assets/rigs/animatronic_demo.toml";
+    let clip = path("own.mcb");
+    let args = ["encode", "assets/animatronic_demo.bvh", "--rig", rig];
+    let o = mocap(&[&args[..], &["--max-error", "0.5deg", "-o", &clip]].concat());
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let play = [
+        "play",
+        &clip,
+        "--rig",
+        rig,
+        "--protocol",
+        "maestro",
+        "--output",
+    ];
+    let whole = path("whole.bin");
+    let o = mocap(&[&play[..], &[&whole, "--fast"]].concat());
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let whole = std::fs::read(&whole).expect("whole stream");
+
+    // In real time (the clip lasts 8 s); SIGINT after about one second.
+    let stopped = path("stopped.bin");
+    let child = Command::new(env!("CARGO_BIN_EXE_mocap"))
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .args([&play[..], &[&stopped]].concat())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mocap runs");
+    std::thread::sleep(std::time::Duration::from_millis(1000));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let o = child.wait_with_output().expect("mocap ends");
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(
+        err.contains("mocap: stopped:") && err.contains("returned to rest"),
+        "{err}"
+    );
+    let got = std::fs::read(&stopped).expect("stopped stream");
+    // 12 servos, a 4-byte Set Target each: 48 bytes a tick.
+    let tick = 48;
+    assert_eq!(got.len() % tick, 0);
+    let ticks: Vec<&[u8]> = got.chunks(tick).collect();
+    assert!(ticks.len() < whole.len() / tick, "not stopped early");
+    // Where it stopped: the longest prefix of the whole stream's ticks.
+    let same = ticks
+        .iter()
+        .zip(whole.chunks(tick))
+        .take_while(|(a, b)| **a == *b)
+        .count();
+    assert!(same > 10, "stopped after {same} ticks");
+    let pulse = |c: &[u8]| u16::from(c[2]) | u16::from(c[3]) << 7;
+    // The figure's neutrals: the whole stream's last tick.
+    let neutral: Vec<u16> = whole[whole.len() - tick..].chunks(4).map(pulse).collect();
+    let last: Vec<u16> = ticks.last().unwrap().chunks(4).map(pulse).collect();
+    assert_eq!(last, neutral, "not at rest after the stop");
+    assert!(ticks.len() > same, "nothing sent after the stop");
+
+    // `mocap send --poses` stopped the same way ends with `00` and a `Stop` (SPEC.md §8's
+    // example frame): the firmware parks.
+    let poses = path("poses.bin");
+    let child = Command::new(env!("CARGO_BIN_EXE_mocap"))
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .args(["send", &clip, "--poses", "--output", &poses])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mocap runs");
+    std::thread::sleep(std::time::Duration::from_millis(1000));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let o = child.wait_with_output().expect("mocap ends");
+    assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("sent Stop"), "{}", text(&o.stderr));
+    let sent = std::fs::read(&poses).expect("poses");
+    assert!(
+        sent.ends_with(&[0x00, 0x00, 0x06, 0x04, 0x94, 0x2B, 0x6F, 0xD5, 0x00]),
+        "{:02x?}",
+        &sent[sent.len().saturating_sub(12)..]
+    );
+}

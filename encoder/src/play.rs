@@ -113,6 +113,18 @@ pub struct ServoStream {
     pub limits: Vec<ServoLimits>,
     /// Played on a figure's hard limits ([`servo_clip_stream_on`]): how.
     pub figure: Option<FigureReport>,
+    /// What played, to replay it up to a stop ([`ServoStream::rest_after`]).
+    replay: Replay,
+}
+
+/// The inputs of [`drive`], kept so that a stop can be replayed.
+#[derive(Clone, Debug)]
+struct Replay {
+    targets: Vec<Vec<u16>>,
+    servos: Vec<RigServo>,
+    rate_mhz: u32,
+    protocol: Protocol,
+    figure: Option<(Figure, Identity)>,
 }
 
 /// A figure's hard limits as `mocap play --rig` applies them to a servo
@@ -184,6 +196,28 @@ pub struct HardClamps {
 }
 
 impl ServoStream {
+    /// The ticks that bring every servo to rest when the playback stops
+    /// after its first `ticks` ticks (`mocap play` stopped by Ctrl-C or
+    /// SIGTERM): the same return to rest as after the clip's last tick —
+    /// the playback loop replayed up to the stop, then `Playback::park` at
+    /// the speed (and the figure's acceleration) limits. Past the clip's
+    /// own ticks, the rest of the return already under way.
+    pub fn rest_after(&self, ticks: usize) -> Result<Vec<Vec<u8>>, PlayError> {
+        if ticks >= self.clip_ticks {
+            return Ok(self.ticks.get(ticks..).unwrap_or_default().to_vec());
+        }
+        let r = &self.replay;
+        let cut = drive(
+            r.targets[..ticks].to_vec(),
+            &r.servos,
+            r.rate_mhz,
+            r.protocol,
+            None,
+            r.figure.as_ref().map(|(f, id)| (f, *id)),
+        )?;
+        Ok(cut.ticks[cut.clip_ticks..].to_vec())
+    }
+
     /// All bytes in order.
     pub fn bytes(&self) -> Vec<u8> {
         self.ticks.concat()
@@ -316,6 +350,14 @@ fn drive(
     tracks: Option<ServoTracks>,
     figure: Option<(&Figure, Identity)>,
 ) -> Result<ServoStream, PlayError> {
+    let targets: Vec<Vec<u16>> = targets.into_iter().collect();
+    let replay = Replay {
+        targets: targets.clone(),
+        servos: servos.to_vec(),
+        rate_mhz,
+        protocol,
+        figure: figure.map(|(f, id)| (f.clone(), id)),
+    };
     let mut playback = Playback::<MAX_SERVOS>::new(servos.iter().copied(), rate_mhz)?;
     let mut report = None;
     if let Some((f, identity)) = figure {
@@ -363,6 +405,7 @@ fn drive(
         tracks,
         limits,
         figure: report,
+        replay,
     })
 }
 
@@ -467,6 +510,15 @@ impl PoseStream {
         let ticks = self.frames.len().saturating_sub(2) as u64;
         tick_us((i as u64).saturating_sub(1).min(ticks), self.rate_mhz)
     }
+}
+
+/// What `mocap send` writes when it is stopped: a lone `00`, which ends the
+/// frame the stop may have cut short, then `Stop` (the firmware parks every
+/// servo at its speed limits).
+pub fn stop_frame() -> Result<Vec<u8>, PlayError> {
+    let mut bytes = vec![stream::DELIMITER];
+    bytes.extend(frame(&Message::Stop)?);
+    Ok(bytes)
 }
 
 /// The frames of `mocap send --poses` for a servo clip.

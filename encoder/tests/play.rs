@@ -646,3 +646,42 @@ fn a_clip_for_a_wider_rig_stays_inside_the_figures_hard_limits() {
         assert_eq!(p, h.neutral_qus);
     }
 }
+
+/// A stop at any tick (`mocap play` interrupted): the ticks before it are the stream's own,
+/// and `rest_after` brings every servo from there to its neutral within the speed limits.
+#[test]
+fn a_stop_at_any_tick_returns_every_servo_to_rest() {
+    use mocap_encoder::play::{servo_clip_stream_on, Figure, Policy};
+    let (rig, tracks) = demo_tracks();
+    let options = servo_options(CodecChoice::Index, 0.5, ServoRate::Rig, ServoNames::Keep);
+    let clip = servo_clip::encode_servo_clip(&rig, &tracks, &options).unwrap();
+    let clip = Clip::parse(&clip.bytes).unwrap();
+    let figure = Figure::from_rig(&rig, Policy::ClampIfInside);
+    let s = servo_clip_stream_on(&clip, &figure, Protocol::Maestro, None).unwrap();
+    assert_eq!(s.rest_after(s.clip_ticks).unwrap(), s.ticks[s.clip_ticks..]);
+    assert_eq!(
+        s.rest_after(0).unwrap(),
+        Vec::<Vec<u8>>::new(),
+        "at rest already"
+    );
+    let neutral: Vec<u16> = s.limits.iter().map(|l| l.neutral_qus).collect();
+    for stop in [1, 7, 100, 250, s.clip_ticks - 1] {
+        let rest = s.rest_after(stop).unwrap();
+        assert!(!rest.is_empty(), "stop at {stop}: already at rest?");
+        let mut prev: Vec<u16> = s.pulses[stop - 1].clone();
+        for tick in &rest {
+            let pulses: Vec<u16> = maestro_commands(tick).iter().map(|c| c.1).collect();
+            for ((&p, l), last) in pulses.iter().zip(&s.limits).zip(&mut prev) {
+                assert!((l.min_qus..=l.max_qus).contains(&p), "stop at {stop}");
+                if l.max_step_qus > 0 {
+                    assert!(
+                        p.abs_diff(*last) <= l.max_step_qus,
+                        "stop at {stop}: too fast"
+                    );
+                }
+                *last = p;
+            }
+        }
+        assert_eq!(prev, neutral, "stop at {stop}: not at rest");
+    }
+}

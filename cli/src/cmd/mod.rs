@@ -108,29 +108,84 @@ pub struct Destination {
     fast: bool,
 }
 
+/// A `play` or `send` that Ctrl-C or SIGTERM stopped, after it sent what
+/// brings the servos to rest; `mocap` exits with 130.
+#[derive(Debug)]
+pub struct Stopped(pub String);
+
+impl std::fmt::Display for Stopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Stopped {}
+
+/// Set by Ctrl-C / SIGTERM while a [`Destination`] writes.
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 impl Destination {
     /// Writes `chunks` in order, chunk `i` not before `due(i)` after the
-    /// start unless `--fast`; returns the path written.
+    /// start unless `--fast`; returns the path written and, when Ctrl-C or
+    /// SIGTERM stopped it before chunk `i`, `Some(i)` — it then wrote
+    /// `rest(i)` (what brings the servos to rest from there) paced one chunk
+    /// per `period`. A write that fails (a port unplugged) names the port
+    /// and says where the servos are left.
     pub fn write(
         &self,
         chunks: &[Vec<u8>],
         due: impl Fn(usize) -> std::time::Duration,
-    ) -> Result<PathBuf, String> {
+        period: std::time::Duration,
+        rest: impl Fn(usize) -> Result<Vec<Vec<u8>>, String>,
+    ) -> Result<(PathBuf, Option<usize>), String> {
+        use std::sync::atomic::Ordering;
         let dest = self
             .port
             .clone()
             .or_else(|| self.output.clone())
             .ok_or("give --port or --output")?;
-        let fail = |e: std::io::Error| format!("{}: {e}", dest.display());
+        let fail = |e: std::io::Error| {
+            if self.port.is_some() {
+                format!(
+                    "{}: {e} (unplugged? the controller holds its last command; the firmware's \
+                     streaming mode parks the servos after its stream timeout)",
+                    dest.display()
+                )
+            } else {
+                format!("{}: {e}", dest.display())
+            }
+        };
         let mut file = std::fs::File::create(&dest).map_err(fail)?;
+        // One handler per process (a second `set_handler` fails): set it once.
+        static HANDLER: std::sync::Once = std::sync::Once::new();
+        HANDLER.call_once(|| {
+            // Without a handler Ctrl-C kills the process as before: no worse.
+            let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+        });
         let start = std::time::Instant::now();
         for (i, chunk) in chunks.iter().enumerate() {
             if !self.fast {
                 let at = start + due(i);
-                std::thread::sleep(at.saturating_duration_since(std::time::Instant::now()));
+                // Sleep in slices, so a stop is seen within one of them.
+                while std::time::Instant::now() < at && !STOP.load(Ordering::SeqCst) {
+                    let left = at.saturating_duration_since(std::time::Instant::now());
+                    std::thread::sleep(left.min(std::time::Duration::from_millis(5)));
+                }
+            }
+            if STOP.load(Ordering::SeqCst) {
+                let tail = rest(i)?;
+                let t0 = std::time::Instant::now();
+                for (k, c) in tail.iter().enumerate() {
+                    if !self.fast {
+                        let at = t0 + period * k as u32;
+                        std::thread::sleep(at.saturating_duration_since(std::time::Instant::now()));
+                    }
+                    std::io::Write::write_all(&mut file, c).map_err(fail)?;
+                }
+                return Ok((dest, Some(i)));
             }
             std::io::Write::write_all(&mut file, chunk).map_err(fail)?;
         }
-        Ok(dest)
+        Ok((dest, None))
     }
 }

@@ -88,7 +88,19 @@ pub fn run(a: Args) -> super::Result {
     }
     let rate = s.rate_hz;
     let period = std::time::Duration::from_secs_f64(1.0 / rate);
-    let dest = a.dest.write(&s.ticks, |i| period * i as u32)?;
+    let rest = |i: usize| s.rest_after(i).map_err(|e| e.to_string());
+    let (dest, stopped) = a
+        .dest
+        .write(&s.ticks, |i| period * i as u32, period, rest)?;
+    if let Some(i) = stopped {
+        let back = s.rest_after(i)?.len();
+        return Err(super::Stopped(format!(
+            "{}: after {i} of {} ticks; every servo returned to rest in {back} ticks at its speed limits",
+            dest.display(),
+            s.ticks.len()
+        ))
+        .into());
+    }
     eprintln!(
         "{}: {} ticks at {rate} Hz ({} of the clip, {} back to neutral), {} bytes",
         dest.display(),

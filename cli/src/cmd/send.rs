@@ -39,9 +39,21 @@ pub fn run(a: Args) -> super::Result {
     let c = parse_clip(&a.clip, &bytes)?;
     if a.poses {
         let p = play::pose_frames(&c)?;
-        let dest = a
-            .dest
-            .write(&p.frames, |i| std::time::Duration::from_micros(p.due_us(i)))?;
+        let period = std::time::Duration::from_secs_f64(1000.0 / f64::from(p.rate_mhz.max(1)));
+        let (dest, stopped) = a.dest.write(
+            &p.frames,
+            |i| std::time::Duration::from_micros(p.due_us(i)),
+            period,
+            |_| Ok(vec![play::stop_frame().map_err(|e| e.to_string())?]),
+        )?;
+        if let Some(i) = stopped {
+            return Err(super::Stopped(format!(
+                "{}: after {i} of {} frames; sent Stop (the firmware parks every servo at its speed limits)",
+                dest.display(),
+                p.frames.len()
+            ))
+            .into());
+        }
         eprintln!(
             "{}: {} poses at {} Hz, {} frames, {} bytes",
             dest.display(),
@@ -64,9 +76,20 @@ pub fn run(a: Args) -> super::Result {
         })
         .collect();
     let bit = 1.0 / f64::from(a.baud.max(1));
-    let dest = a.dest.write(&frames, |i| {
-        std::time::Duration::from_secs_f64(before[i] as f64 * 10.0 * bit)
-    })?;
+    let (dest, stopped) = a.dest.write(
+        &frames,
+        |i| std::time::Duration::from_secs_f64(before[i] as f64 * 10.0 * bit),
+        std::time::Duration::ZERO,
+        |_| Ok(vec![play::stop_frame().map_err(|e| e.to_string())?]),
+    )?;
+    if let Some(i) = stopped {
+        return Err(super::Stopped(format!(
+            "{}: upload stopped after {i} of {} frames; sent Stop",
+            dest.display(),
+            frames.len()
+        ))
+        .into());
+    }
     eprintln!(
         "{}: {} pass(es), {} frames, {} bytes",
         dest.display(),
