@@ -495,6 +495,22 @@ impl Mode for FlashClip<'_> {
         driver.park(text)?;
         driver.print_hard_clamps(text);
         driver.print_stats("servo_ticks", self.calibration_ticks, text);
+        // What the figure's hard limits cost: the table in flash, the stage in the playback.
+        text.str("#")
+            .kv(
+                "hard_table_bytes",
+                core::mem::size_of_val(&HARD_LIMITS) as u64,
+            )
+            .kv(
+                "figure_table_bytes",
+                core::mem::size_of_val(&FIGURE_SERVOS) as u64,
+            )
+            .kv(
+                "hard_stage_bytes",
+                core::mem::size_of::<mocap_servo::HardStage<MAX_SERVOS>>() as u64,
+            )
+            .kv("playback_bytes", core::mem::size_of::<Rig>() as u64)
+            .nl();
         text.str("#")
             .kv("stack_bytes_used", crate::stack::used_bytes() as u64)
             .nl();

@@ -330,9 +330,23 @@ impl HardStep {
             // `a` per tick ([`brake_speed`]), kept against the target and
             // against both range ends, so the servo never has to stop harder
             // than `a`, even when the target jumps behind it.
-            let a64 = i64::from(self.max_accel_qus);
-            let brake = |dist: i64| brake_speed(a64, dist);
-            let speed = i64::from(speed).min(brake(i64::from(dist)));
+            let a = u32::from(self.max_accel_qus);
+            // From `free` on, braking allows at least the speed limit, which
+            // bounds every speed below: the bound changes nothing, and the
+            // square root is skipped (most ticks, away from the range ends).
+            let free = match self.max_step_qus {
+                0 => u32::MAX,
+                m => stopping_distance(a, u32::from(m)),
+            };
+            let brake = |dist: u32| -> i64 {
+                if dist >= free {
+                    i64::from(self.max_step_qus)
+                } else {
+                    i64::from(brake_speed(a, dist))
+                }
+            };
+            let a64 = i64::from(a);
+            let speed = i64::from(speed).min(brake(dist));
             let want = if d < 0 {
                 0i64.saturating_sub(speed)
             } else {
@@ -344,9 +358,11 @@ impl HardStep {
                 let m = i64::from(self.max_step_qus);
                 (lo, hi) = (lo.max(0i64.saturating_sub(m)), hi.min(m));
             }
-            let p = i64::from(pos);
-            lo = lo.max(0i64.saturating_sub(brake(p.saturating_sub(i64::from(self.min_qus)))));
-            hi = hi.min(brake(i64::from(self.max_qus).saturating_sub(p)));
+            // `pos` is inside the range here.
+            let below = u32::from(pos.saturating_sub(self.min_qus));
+            let above = u32::from(self.max_qus.saturating_sub(pos));
+            lo = lo.max(0i64.saturating_sub(brake(below)));
+            hi = hi.min(brake(above));
             let v = if lo <= hi { want.max(lo).min(hi) } else { 0 };
             i32::try_from(v).unwrap_or(0)
         };
@@ -364,30 +380,56 @@ impl HardStep {
 /// The largest speed `s` (¼ µs per tick) that stops within `dist` when it
 /// can drop by at most `a > 0` per tick: the ticks `s, s − a, s − 2a, …`
 /// (while positive) add up to at most `dist`. With `k` further ticks (`k·a
-/// < s <= (k+1)·a`) they add up to `(k+1)·s − a·k(k+1)/2`. 0 for `dist <= 0`.
-fn brake_speed(a: i64, dist: i64) -> i64 {
-    if dist <= 0 || a <= 0 {
+/// < s <= (k+1)·a`) they add up to `(k+1)·s − a·k(k+1)/2`. 0 for `dist = 0`.
+/// 32-bit divisions and square root where the values fit (always for the
+/// ranges of ¼ µs pulses but the largest): cheap on a Cortex-M.
+fn brake_speed(a: u32, dist: u32) -> u32 {
+    if dist == 0 || a == 0 {
         return 0;
     }
+    let (a64, d64) = (u64::from(a), u64::from(dist));
     // The continuous bound s(s + a) <= 2·a·dist is never below the answer.
-    let root = a
+    let disc = a64
         .saturating_mul(8)
-        .saturating_mul(dist)
-        .saturating_add(a.saturating_mul(a))
-        .unsigned_abs()
-        .isqrt();
-    let upper = i64::try_from(root).unwrap_or(i64::MAX).saturating_sub(a) / 2;
-    let mut k = upper.checked_div(a).unwrap_or(0).saturating_add(1);
+        .saturating_mul(d64)
+        .saturating_add(a64.saturating_mul(a64));
+    let root = match u32::try_from(disc) {
+        Ok(small) => small.isqrt(),
+        Err(_) => u32::try_from(disc.isqrt()).unwrap_or(u32::MAX),
+    };
+    let upper = root.saturating_sub(a) / 2;
+    let mut k = u64::from(upper.checked_div(a).unwrap_or(0)).saturating_add(1);
     loop {
         let k1 = k.saturating_add(1);
-        let tri = a.saturating_mul(k).saturating_mul(k1) / 2;
-        let fit = dist.saturating_add(tri).checked_div(k1).unwrap_or(0);
-        let s = k1.saturating_mul(a).min(fit).min(dist);
-        if s > k.saturating_mul(a) || k == 0 {
-            return s.max(0);
+        let tri = a64.saturating_mul(k).saturating_mul(k1) / 2;
+        let num = d64.saturating_add(tri);
+        let fit = match (u32::try_from(num), u32::try_from(k1)) {
+            (Ok(n), Ok(k1)) => u64::from(n.checked_div(k1).unwrap_or(0)),
+            _ => num.checked_div(k1).unwrap_or(0),
+        };
+        let s = k1.saturating_mul(a64).min(fit).min(d64);
+        if s > k.saturating_mul(a64) || k == 0 {
+            return u32::try_from(s).unwrap_or(u32::MAX);
         }
         k = k.wrapping_sub(1);
     }
+}
+
+/// The distance a servo at speed `v` needs to stop braking by `a > 0` per
+/// tick: `v + (v − a) + (v − 2a) + …` while positive — the least `dist` with
+/// [`brake_speed`]`(a, dist) >= v`.
+fn stopping_distance(a: u32, v: u32) -> u32 {
+    if a == 0 || v == 0 {
+        return 0;
+    }
+    // k further ticks after the first: k·a < v.
+    let k = u64::from(v.saturating_sub(1).checked_div(a).unwrap_or(0));
+    let (a64, v64) = (u64::from(a), u64::from(v));
+    let sum = k
+        .saturating_add(1)
+        .saturating_mul(v64)
+        .saturating_sub(a64.saturating_mul(k).saturating_mul(k.saturating_add(1)) / 2);
+    u32::try_from(sum).unwrap_or(u32::MAX)
 }
 
 /// The hard-limit stage of `N` servos: the last pulse and velocity of each,
@@ -501,6 +543,60 @@ mod tests {
     use super::*;
     use crate::test_rng::TestRng;
 
+    /// The brake speed as first written (i64 throughout): the oracle of the
+    /// 32-bit one.
+    fn brake_speed_reference(a: i64, dist: i64) -> i64 {
+        if dist <= 0 || a <= 0 {
+            return 0;
+        }
+        let root = (a * 8 * dist + a * a).unsigned_abs().isqrt();
+        let upper = (root as i64 - a) / 2;
+        let mut k = upper / a + 1;
+        loop {
+            let k1 = k + 1;
+            let tri = a * k * k1 / 2;
+            let fit = (dist + tri) / k1;
+            let s = (k1 * a).min(fit).min(dist);
+            if s > k * a || k == 0 {
+                return s.max(0);
+            }
+            k -= 1;
+        }
+    }
+
+    /// Behaviour kept: the 32-bit brake speed is the reference's on every
+    /// `a` and `dist` of ¼ µs pulses (every `a` up to 300 with every
+    /// distance, and random pairs over the whole range), and the stopping
+    /// distance is the first distance whose brake speed reaches `v`.
+    #[test]
+    fn brake_speed_is_the_reference_one() {
+        for a in 1..=300u32 {
+            for dist in 0..=65_535u32 {
+                assert_eq!(
+                    i64::from(brake_speed(a, dist)),
+                    brake_speed_reference(i64::from(a), i64::from(dist)),
+                    "a={a} dist={dist}"
+                );
+            }
+        }
+        let mut rng = TestRng::new(11);
+        for _ in 0..200_000 {
+            let (a, dist) = (u32::from(rng.next_u16()).max(1), u32::from(rng.next_u16()));
+            assert_eq!(
+                i64::from(brake_speed(a, dist)),
+                brake_speed_reference(i64::from(a), i64::from(dist)),
+                "a={a} dist={dist}"
+            );
+        }
+        for _ in 0..20_000 {
+            let a = u32::from(rng.next_u16() % 500).max(1);
+            let v = u32::from(rng.next_u16() % 2000).max(1);
+            let free = stopping_distance(a, v);
+            assert!(brake_speed(a, free) >= v, "a={a} v={v} free={free}");
+            assert!(brake_speed(a, free - 1) < v, "a={a} v={v} free={free}");
+        }
+    }
+
     #[test]
     fn every_policy_reads_back_from_its_name() {
         for (policy, name) in Policy::ALL {
@@ -523,7 +619,8 @@ mod tests {
 
     #[test]
     fn brake_speed_is_the_largest_that_stops() {
-        let stops = |a: i64, s: i64, d: i64| {
+        let stops = |a: u32, s: u32, d: u32| {
+            let (a, s, d) = (i64::from(a), i64::from(s), i64::from(d));
             let (mut s, mut sum) = (s, 0);
             while s > 0 {
                 sum += s;
@@ -531,8 +628,8 @@ mod tests {
             }
             sum <= d
         };
-        for a in 1..40 {
-            for d in 0..400 {
+        for a in 1..40u32 {
+            for d in 0..400u32 {
                 let s = brake_speed(a, d);
                 assert!(stops(a, s, d) && !stops(a, s + 1, d), "a={a} d={d} s={s}");
             }
