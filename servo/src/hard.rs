@@ -442,11 +442,14 @@ pub struct HardStage<const N: usize> {
     vel: [i32; N],
     clamped: [u32; N],
     worst: [u16; N],
+    /// Slots in use (the rest are never stepped: a playback's idle slots).
+    count: usize,
 }
 
 impl<const N: usize> HardStage<N> {
-    /// A stage for `steps`, at rest at their neutrals.
-    pub fn new(steps: [HardStep; N]) -> Self {
+    /// A stage for the first `count` of `steps` (at most `N`), at rest at
+    /// their neutrals; the slots past them are left alone.
+    pub fn new(steps: [HardStep; N], count: usize) -> Self {
         let mut pos = [0u16; N];
         for (p, s) in pos.iter_mut().zip(&steps) {
             *p = s.neutral_qus;
@@ -457,6 +460,7 @@ impl<const N: usize> HardStage<N> {
             vel: [0; N],
             clamped: [0; N],
             worst: [0; N],
+            count: count.min(N),
         }
     }
 
@@ -480,6 +484,7 @@ impl<const N: usize> HardStage<N> {
             .zip(&self.steps)
             .zip(&mut self.clamped)
             .zip(&mut self.worst)
+            .take(self.count)
         {
             let (next, vel) = s.step(*p, *v, *q);
             if next != *q {
@@ -499,6 +504,7 @@ impl<const N: usize> HardStage<N> {
             .zip(&mut self.pos)
             .zip(&mut self.vel)
             .zip(&self.steps)
+            .take(self.count)
         {
             let (next, vel) = s.step(*p, *v, s.neutral_qus);
             (*p, *v, *q) = (next, vel, next);
@@ -512,6 +518,7 @@ impl<const N: usize> HardStage<N> {
     pub fn park_ticks_max(&self) -> u32 {
         self.steps
             .iter()
+            .take(self.count)
             .map(HardStep::park_ticks_max)
             .max()
             .unwrap_or(0)
@@ -523,6 +530,7 @@ impl<const N: usize> HardStage<N> {
             .iter()
             .zip(&self.vel)
             .zip(&self.steps)
+            .take(self.count)
             .all(|((&p, &v), s)| p == s.neutral_qus && v == 0)
     }
 
@@ -715,7 +723,7 @@ mod tests {
 
     #[test]
     fn open_steps_pass_pulses_through() {
-        let mut stage = HardStage::<3>::new([HardStep::OPEN; 3]);
+        let mut stage = HardStage::<3>::new([HardStep::OPEN; 3], 3);
         assert_eq!(stage.positions(), &[6000; 3]);
         let mut q = [0, 16_000, 65_535];
         stage.apply(&mut q);

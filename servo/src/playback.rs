@@ -156,7 +156,7 @@ impl<const N: usize> Playback<N> {
         // The clip's stage starts at its own neutrals (the pulses it was
         // going to start from), the hard stage and the servos at the
         // figure's.
-        let stage = HardStage::new(steps);
+        let stage = HardStage::new(steps, self.count);
         self.held = *stage.positions();
         self.hard = Some(stage);
         Ok((self, fit))
