@@ -203,6 +203,23 @@ fn play_holds_a_servo_clip_to_the_figure() {
     );
 }
 
+/// `mocap ARGS` in real time, sent SIGINT (Ctrl-C) after about one second.
+fn interrupted(args: &[&str]) -> Output {
+    let child = Command::new(env!("CARGO_BIN_EXE_mocap"))
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .args(args)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mocap runs");
+    std::thread::sleep(std::time::Duration::from_millis(1000));
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    child.wait_with_output().expect("mocap ends")
+}
+
 /// `mocap play` stopped by Ctrl-C (SIGINT) mid-clip: it sends what it would have sent up to
 /// there, then brings every servo back to rest at its speed limits, and exits 130 saying so.
 #[test]
@@ -230,19 +247,7 @@ fn play_stopped_by_ctrl_c_returns_the_servos_to_rest() {
 
     // In real time (the clip lasts 8 s); SIGINT after about one second.
     let stopped = path("stopped.bin");
-    let child = Command::new(env!("CARGO_BIN_EXE_mocap"))
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .args([&play[..], &[&stopped]].concat())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("mocap runs");
-    std::thread::sleep(std::time::Duration::from_millis(1000));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill runs");
-    assert!(kill.success());
-    let o = child.wait_with_output().expect("mocap ends");
+    let o = interrupted(&[&play[..], &[&stopped]].concat());
     let err = text(&o.stderr);
     assert_eq!(o.status.code(), Some(130), "{err}");
     assert!(
@@ -272,19 +277,7 @@ fn play_stopped_by_ctrl_c_returns_the_servos_to_rest() {
     // `mocap send --poses` stopped the same way ends with `00` and a `Stop` (SPEC.md §8's
     // example frame): the firmware parks.
     let poses = path("poses.bin");
-    let child = Command::new(env!("CARGO_BIN_EXE_mocap"))
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .args(["send", &clip, "--poses", "--output", &poses])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("mocap runs");
-    std::thread::sleep(std::time::Duration::from_millis(1000));
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill runs");
-    assert!(kill.success());
-    let o = child.wait_with_output().expect("mocap ends");
+    let o = interrupted(&["send", &clip, "--poses", "--output", &poses]);
     assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("sent Stop"), "{}", text(&o.stderr));
     let sent = std::fs::read(&poses).expect("poses");

@@ -221,6 +221,41 @@ fn spec_bytes(name: &str) -> Vec<u8> {
     bytes
 }
 
+/// Two root joints `a` and `b` of one `Zrotation` each, three frames of 10° and −20°, coded
+/// by `index` at 0.5°: the codec section of §3.5.1's and §3.6's servo clips.
+fn two_channel_clip() -> Vec<u8> {
+    use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
+    let joint = |name: &str| Joint {
+        name: name.into(),
+        parent: None,
+        offset: [0.0; 3],
+        channels: vec![ChannelKind::Zrotation],
+        end_site: false,
+    };
+    let motion = Motion {
+        skeleton: Skeleton {
+            joints: vec![joint("a"), joint("b")],
+        },
+        frame_time: 0.02,
+        values: vec![10.0, -20.0, 10.0, -20.0, 10.0, -20.0],
+    };
+    mocap_encoder::encode::encode(
+        &motion,
+        &mocap_encoder::encode::EncodeOptions {
+            codec: mocap_encoder::encode::CodecChoice::Index,
+            bound: mocap_encoder::encode::Bound {
+                angle_deg: Some(0.5),
+                position_mm: None,
+                arms_mm: None,
+            },
+            metres_per_unit: 1e-3,
+            key_interval: None,
+        },
+    )
+    .unwrap()
+    .bytes
+}
+
 /// The two-servo rig of §3.5.1's and §3.6's examples.
 fn spec_rig() -> mocap_encoder::rig::Rig {
     use mocap_encoder::rig::Rig;
@@ -268,36 +303,8 @@ fn rig_digest_example() {
     assert_eq!(rig.digest().to_le_bytes().to_vec(), section);
 
     // A one-channel-per-servo coded clip, made a servo clip by the encoder.
-    use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
-    let joint = |name: &str| Joint {
-        name: name.into(),
-        parent: None,
-        offset: [0.0; 3],
-        channels: vec![ChannelKind::Zrotation],
-        end_site: false,
-    };
-    let motion = Motion {
-        skeleton: Skeleton {
-            joints: vec![joint("a"), joint("b")],
-        },
-        frame_time: 0.02,
-        values: vec![10.0, -20.0, 10.0, -20.0],
-    };
-    let coded = mocap_encoder::encode::encode(
-        &motion,
-        &mocap_encoder::encode::EncodeOptions {
-            codec: mocap_encoder::encode::CodecChoice::Index,
-            bound: mocap_encoder::encode::Bound {
-                angle_deg: Some(0.5),
-                position_mm: None,
-                arms_mm: None,
-            },
-            metres_per_unit: 1e-3,
-            key_interval: None,
-        },
-    )
-    .unwrap();
-    let bytes = attach_rig(&coded.bytes, &rig, ServoNames::Strip).unwrap();
+    let coded = two_channel_clip();
+    let bytes = attach_rig(&coded, &rig, ServoNames::Strip).unwrap();
     let clip = Clip::parse(&bytes).unwrap();
     let last = clip.sections().last().unwrap();
     assert_eq!((last.id, last.bytes), (0x80, section.as_slice()));
@@ -332,36 +339,8 @@ fn servo_form_and_compact_rig_examples() {
 
     // A two-servo, one-frame index clip around them (§7.1's codec section
     // shape is not needed: take a real one from the encoder).
-    use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
-    let joint = |name: &str| Joint {
-        name: name.into(),
-        parent: None,
-        offset: [0.0; 3],
-        channels: vec![ChannelKind::Zrotation],
-        end_site: false,
-    };
-    let motion = Motion {
-        skeleton: Skeleton {
-            joints: vec![joint("a"), joint("b")],
-        },
-        frame_time: 0.02,
-        values: vec![10.0, -20.0, 10.0, -20.0, 10.0, -20.0],
-    };
-    let enc = mocap_encoder::encode::encode(
-        &motion,
-        &mocap_encoder::encode::EncodeOptions {
-            codec: mocap_encoder::encode::CodecChoice::Index,
-            bound: mocap_encoder::encode::Bound {
-                angle_deg: Some(0.5),
-                position_mm: None,
-                arms_mm: None,
-            },
-            metres_per_unit: 1e-3,
-            key_interval: None,
-        },
-    )
-    .unwrap();
-    let codec = Clip::parse(&enc.bytes)
+    let coded = two_channel_clip();
+    let codec = Clip::parse(&coded)
         .unwrap()
         .sections()
         .find(|s| s.id >= 0x10)
