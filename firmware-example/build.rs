@@ -220,7 +220,19 @@ fn figure(manifest_dir: &Path, out_dir: &Path) {
         _ => manifest_dir.join(DEFAULT_FIGURE),
     };
     println!("cargo:rerun-if-changed={}", path.display());
-    let rig = Rig::read_file(&path).unwrap_or_else(|e| {
+    // Messages name the file as the user gave it (`MOCAP_FIGURE_NAME`, set by
+    // scripts/firmware.sh, which builds from a copy named by its content).
+    println!("cargo:rerun-if-env-changed=MOCAP_FIGURE_NAME");
+    let name = match env::var("MOCAP_FIGURE_NAME") {
+        Ok(name) if !name.is_empty() => name,
+        _ => path.display().to_string(),
+    };
+    let text = fs::read_to_string(&path).unwrap_or_else(|e| {
+        fail(&format!(
+            "mocap-firmware: cannot read the figure's rig file (MOCAP_FIGURE) {name}: {e}"
+        ))
+    });
+    let rig = Rig::parse(&text, &name).unwrap_or_else(|e| {
         fail(&format!(
             "mocap-firmware: the figure's rig file (MOCAP_FIGURE): {e}"
         ))

@@ -192,7 +192,7 @@ build() {
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
         MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
-            MOCAP_FIGURE="$staged_figure" MOCAP_POLICY="$POLICY" \
+            MOCAP_FIGURE="$staged_figure" MOCAP_FIGURE_NAME="$FIGURE" MOCAP_POLICY="$POLICY" \
             MOCAP_STREAM_TIMEOUT_MS="$STREAM_TIMEOUT" MOCAP_ESTOP_AT_TICK="$ESTOP_AT" CARGO_TARGET_DIR="$target_dir" \
             mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
