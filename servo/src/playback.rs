@@ -221,13 +221,6 @@ impl<const N: usize> Playback<N> {
         outputs
     }
 
-    /// Whether `rig` is this rig: the same rate and servos.
-    pub fn matches(&self, rig: &Rig<'_>) -> bool {
-        rig.rate_mhz() == self.rate_mhz
-            && rig.servo_count() == self.count
-            && rig.servos().zip(self.servos()).all(|(a, b)| a == *b)
-    }
-
     /// Ticks of a clip of `duration_us`: one at t = 0, then one per period.
     pub fn tick_count(&self, duration_us: u64) -> u64 {
         tick_count(duration_us, self.rate_mhz)
