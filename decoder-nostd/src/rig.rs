@@ -438,31 +438,16 @@ where
     let count = u32::try_from(servos.len()).unwrap_or(u32::MAX);
     digest.update(&count.to_le_bytes());
     for d in servos {
-        digest.update(&digest_record(&d));
+        let s = &d.servo;
+        digest.update(&s.output.to_le_bytes());
+        digest.update(&s.angle_lo_mdeg.to_le_bytes());
+        digest.update(&s.angle_hi_mdeg.to_le_bytes());
+        digest.update(&s.pulse_lo_qus.to_le_bytes());
+        digest.update(&s.pulse_hi_qus.to_le_bytes());
+        digest.update(&s.neutral_qus.to_le_bytes());
+        digest.update(&s.max_speed_mdeg_s.to_le_bytes());
+        digest.update(&d.max_speed_qus_s.to_le_bytes());
+        digest.update(&d.max_accel_qus_s2.to_le_bytes());
     }
     digest.finalize()
-}
-
-fn digest_record(d: &DigestServo) -> [u8; DIGEST_SERVO_LEN] {
-    let s = &d.servo;
-    let mut r = [0u8; DIGEST_SERVO_LEN];
-    let fields: [&[u8]; 9] = [
-        &s.output.to_le_bytes(),
-        &s.angle_lo_mdeg.to_le_bytes(),
-        &s.angle_hi_mdeg.to_le_bytes(),
-        &s.pulse_lo_qus.to_le_bytes(),
-        &s.pulse_hi_qus.to_le_bytes(),
-        &s.neutral_qus.to_le_bytes(),
-        &s.max_speed_mdeg_s.to_le_bytes(),
-        &d.max_speed_qus_s.to_le_bytes(),
-        &d.max_accel_qus_s2.to_le_bytes(),
-    ];
-    let mut at = 0usize;
-    for f in fields {
-        if let Some(slot) = r.get_mut(at..at.wrapping_add(f.len())) {
-            slot.copy_from_slice(f);
-        }
-        at = at.wrapping_add(f.len());
-    }
-    r
 }

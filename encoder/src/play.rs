@@ -177,13 +177,6 @@ pub struct FigureReport {
     pub clamps: Vec<HardClamps>,
 }
 
-impl FigureReport {
-    /// Whether the clip was made for this figure ([`Identity::is_same`]).
-    pub fn same_rig(&self) -> bool {
-        self.identity.is_same()
-    }
-}
-
 /// What a figure's hard limits did to one servo's pulses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HardClamps {
@@ -351,13 +344,6 @@ fn drive(
     figure: Option<(&Figure, Identity)>,
 ) -> Result<ServoStream, PlayError> {
     let targets: Vec<Vec<u16>> = targets.into_iter().collect();
-    let replay = Replay {
-        targets: targets.clone(),
-        servos: servos.to_vec(),
-        rate_mhz,
-        protocol,
-        figure: figure.map(|(f, id)| (f.clone(), id)),
-    };
     let mut playback = Playback::<MAX_SERVOS>::new(servos.iter().copied(), rate_mhz)?;
     let mut report = None;
     if let Some((f, identity)) = figure {
@@ -379,11 +365,11 @@ fn drive(
     let (ticks, pulses, clip_ticks) = match protocol {
         Protocol::Maestro => {
             let output = MaestroOutput::new(&port, &outputs).map_err(refused)?;
-            play(&mut playback, output, &port, targets)?
+            play(&mut playback, output, &port, &targets)?
         }
         Protocol::Ssc32 => {
             let output = Ssc32Output::new(&port, &outputs, time_ms).map_err(refused)?;
-            play(&mut playback, output, &port, targets)?
+            play(&mut playback, output, &port, &targets)?
         }
     };
     if let Some(r) = &mut report {
@@ -405,7 +391,13 @@ fn drive(
         tracks,
         limits,
         figure: report,
-        replay,
+        replay: Replay {
+            targets,
+            servos: servos.to_vec(),
+            rate_mhz,
+            protocol,
+            figure: figure.map(|(f, id)| (f.clone(), id)),
+        },
     })
 }
 
@@ -418,7 +410,7 @@ fn play<O: ServoOutput<Error = RecordError>>(
     playback: &mut Playback<MAX_SERVOS>,
     mut output: O,
     port: &SerialRecorder<TICK_BYTES>,
-    targets: impl IntoIterator<Item = Vec<u16>>,
+    targets: &[Vec<u16>],
 ) -> Result<Played, OutputError<RecordError>> {
     let (mut ticks, mut sent) = (Vec::new(), Vec::new());
     let mut take = |pulses: &[u16]| -> Result<(), OutputError<RecordError>> {

@@ -471,26 +471,21 @@ impl Mode for FlashClip<'_> {
             .kv("ticks", n_ticks)
             .nl();
         let mut angles = [0i32; PLAYER_WORDS];
-        let mut failed = None;
         for i in 0..n_ticks {
             let t_us = driver.rig.tick_us(i);
             match driver.clip_tick(&mut player, t_us, &mut angles, text) {
                 Ok(()) => {}
-                // Faults end at rest: park first, then report.
+                // Faults end at rest: park first, then report (the park below is then a no-op).
                 Err(Failure::EStop) => {
                     driver.park_after(Fault::EStop, text)?;
                     break;
                 }
                 Err(e @ Failure::Decoder(..)) => {
                     driver.park_after(Fault::DecodeError, text)?;
-                    failed = Some(e);
-                    break;
+                    return Err(e);
                 }
                 Err(e) => return Err(e),
             }
-        }
-        if let Some(e) = failed {
-            return Err(e);
         }
         driver.park(text)?;
         driver.print_hard_clamps(text);

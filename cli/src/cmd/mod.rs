@@ -127,9 +127,9 @@ static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(
 impl Destination {
     /// Writes `chunks` in order, chunk `i` not before `due(i)` after the
     /// start unless `--fast`; returns the path written and, when Ctrl-C or
-    /// SIGTERM stopped it before chunk `i`, `Some(i)` — it then wrote
-    /// `rest(i)` (what brings the servos to rest from there) paced one chunk
-    /// per `period`. A write that fails (a port unplugged) names the port
+    /// SIGTERM stopped it before chunk `i`, `Some((i, n))` — it then wrote
+    /// the `n` chunks of `rest(i)` (what brings the servos to rest from
+    /// there) paced one chunk per `period`. A write that fails (a port unplugged) names the port
     /// and says where the servos are left.
     pub fn write(
         &self,
@@ -137,7 +137,7 @@ impl Destination {
         due: impl Fn(usize) -> std::time::Duration,
         period: std::time::Duration,
         rest: impl Fn(usize) -> Result<Vec<Vec<u8>>, String>,
-    ) -> Result<(PathBuf, Option<usize>), String> {
+    ) -> Result<(PathBuf, Option<(usize, usize)>), String> {
         use std::sync::atomic::Ordering;
         let dest = self
             .port
@@ -182,7 +182,7 @@ impl Destination {
                     }
                     std::io::Write::write_all(&mut file, c).map_err(fail)?;
                 }
-                return Ok((dest, Some(i)));
+                return Ok((dest, Some((i, tail.len()))));
             }
             std::io::Write::write_all(&mut file, chunk).map_err(fail)?;
         }

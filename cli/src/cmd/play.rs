@@ -92,8 +92,7 @@ pub fn run(a: Args) -> super::Result {
     let (dest, stopped) = a
         .dest
         .write(&s.ticks, |i| period * i as u32, period, rest)?;
-    if let Some(i) = stopped {
-        let back = s.rest_after(i)?.len();
+    if let Some((i, back)) = stopped {
         return Err(super::Stopped(format!(
             "{}: after {i} of {} ticks; every servo returned to rest in {back} ticks at its speed limits",
             dest.display(),

@@ -46,7 +46,7 @@ pub fn run(a: Args) -> super::Result {
             period,
             |_| Ok(vec![play::stop_frame().map_err(|e| e.to_string())?]),
         )?;
-        if let Some(i) = stopped {
+        if let Some((i, _)) = stopped {
             return Err(super::Stopped(format!(
                 "{}: after {i} of {} frames; sent Stop (the firmware parks every servo at its speed limits)",
                 dest.display(),
@@ -82,7 +82,7 @@ pub fn run(a: Args) -> super::Result {
         std::time::Duration::ZERO,
         |_| Ok(vec![play::stop_frame().map_err(|e| e.to_string())?]),
     )?;
-    if let Some(i) = stopped {
+    if let Some((i, _)) = stopped {
         return Err(super::Stopped(format!(
             "{}: upload stopped after {i} of {} frames; sent Stop",
             dest.display(),
