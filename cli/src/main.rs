@@ -40,6 +40,8 @@ enum Command {
     /// `Pose` per servo tick of a servo clip, decoded here at the rig's rate (`seq` = tick
     /// number; the firmware holds the last pose over lost ones), then `Stop`. See SPEC.md §8.
     Send(cmd::send::Args),
+    /// Shows: many clips in one file, with cue lists and triggers (`mocap show build show.toml -o show.mcb`).
+    Show(cmd::show::Args),
     /// Motion Track picture (Hu et al. 2010): clips as curves in a 2-D map of key poses.
     Track(cmd::track::Args),
     /// Write the procedural demo clip the project ships.
@@ -55,6 +57,7 @@ fn run(cli: Cli) -> cmd::Result {
         Command::Bench(a) => cmd::bench::run(a),
         Command::Play(a) => cmd::play::run(a),
         Command::Send(a) => cmd::send::run(a),
+        Command::Show(a) => cmd::show::run(a),
         Command::Track(a) => cmd::track::run(a),
         Command::Generate(a) => cmd::generate::run(a),
     }

@@ -287,3 +287,118 @@ fn play_stopped_by_ctrl_c_returns_the_servos_to_rest() {
         &sent[sent.len().saturating_sub(12)..]
     );
 }
+
+#[test]
+fn show_build_info_and_play_the_demo_show() {
+    let d = out_dir("show");
+    let show = d.join("demo_show.mcb");
+    let show = show.to_str().expect("utf-8 path");
+    let o = mocap(&["show", "build", "assets/shows/demo.toml", "-o", show]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let summary = text(&o.stdout);
+    assert!(summary.contains("show `demo`, 4 clips"), "{summary}");
+    assert!(summary.contains("every clip's bound holds"), "{summary}");
+    assert!(
+        !summary.contains("LARGER"),
+        "every seam within its clip's own step: {summary}"
+    );
+    let o = mocap(&["info", show]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let info = text(&o.stdout);
+    assert!(info.starts_with("show: "), "{info}");
+    assert!(
+        info.contains("clip 3 `idle`") && info.contains("cue list `main`: 6 cues"),
+        "{info}"
+    );
+    assert!(
+        info.contains("trigger input 1: clip `talk` | clip `look`"),
+        "{info}"
+    );
+    // A clip reader refuses the show by name.
+    let o = mocap(&["decode", show, "-o", d.join("x.bvh").to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("is a show"), "{}", text(&o.stderr));
+
+    let out = d.join("show.maestro");
+    let o = mocap(&[
+        "play",
+        show,
+        "--cues",
+        "assets/shows/demo_cues.txt",
+        "--protocol",
+        "maestro",
+        "--output",
+        out.to_str().unwrap(),
+        "--fast",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("# event t_us=0 serial 7e ff 06 03 00 00 01 ef"),
+        "{err}"
+    );
+    assert!(err.contains("# event t_us=9000000 gpio 2 1"), "{err}");
+    // 14 s at 50 Hz, then the return to rest: 12 servos × 4 bytes a tick.
+    let bytes = std::fs::read(&out).unwrap();
+    assert_eq!(bytes.len() % 48, 0);
+    assert!(bytes.len() / 48 > 700, "{} ticks", bytes.len() / 48);
+}
+
+#[test]
+fn show_errors_name_the_file_and_line() {
+    let d = out_dir("show-errors");
+    let bad = d.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[show]\nname = \"x\"\n\n[[clip]]\nname = \"a\"\nfile = \"../../../../assets/animatronic_demo.bvh\"\nloop = { in = \"2s\", out = \"1s\" }\n\n[[cues]]\nname = \"m\"\ncue = [ { at = \"1s\", play = \"nope\" } ]\n",
+    )
+    .unwrap();
+    let o = mocap(&[
+        "show",
+        "build",
+        bad.to_str().unwrap(),
+        "-o",
+        d.join("x.mcb").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("bad.toml:11:") && err.contains("no clip named `nope`"),
+        "{err}"
+    );
+
+    // Two sources with different channels: both files and the first difference.
+    let other = d.join("other.bvh");
+    let demo = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../assets/animatronic_demo.bvh"
+    ))
+    .unwrap();
+    std::fs::write(&other, demo.replacen("JOINT Torso", "JOINT Spine", 1)).unwrap();
+    let two = d.join("two.toml");
+    std::fs::write(
+        &two,
+        format!(
+            "[show]\nname = \"two\"\n[[clip]]\nname = \"a\"\nfile = \"{}\"\n[[clip]]\nname = \"b\"\nfile = \"other.bvh\"\n",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/animatronic_demo.bvh")
+        ),
+    )
+    .unwrap();
+    let o = mocap(&[
+        "show",
+        "build",
+        two.to_str().unwrap(),
+        "-o",
+        d.join("y.mcb").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("other.bvh") && err.contains("animatronic_demo.bvh"),
+        "{err}"
+    );
+    assert!(
+        err.contains("`Spine.Zrotation`, not `Torso.Zrotation`"),
+        "{err}"
+    );
+}

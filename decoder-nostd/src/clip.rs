@@ -41,7 +41,7 @@ impl<'a> Iterator for Sections<'a> {
     }
 }
 
-fn read_entry(r: &mut Reader<'_>) -> Option<(u8, core::ops::Range<usize>)> {
+pub(crate) fn read_entry(r: &mut Reader<'_>) -> Option<(u8, core::ops::Range<usize>)> {
     let id = r.u8()?;
     let reserved = r.take(3)?;
     if reserved != [0, 0, 0] {
@@ -50,6 +50,57 @@ fn read_entry(r: &mut Reader<'_>) -> Option<(u8, core::ops::Range<usize>)> {
     let offset = usize::try_from(r.u32_le()?).ok()?;
     let len = usize::try_from(r.u32_le()?).ok()?;
     Some((id, offset..offset.checked_add(len)?))
+}
+
+/// Checks the preamble (§2.1, §9.1) and the CRC (§2.3) of a file of
+/// `version` with at most `max_sections` sections; returns the section
+/// count, where the body starts and where the CRC starts.
+pub(crate) fn open_container(
+    bytes: &[u8],
+    version: u8,
+    max_sections: usize,
+) -> Result<(u16, usize, usize), Error> {
+    let mut r = Reader::new(bytes);
+    let truncated = |needed: usize| Error::ContainerTruncated {
+        needed,
+        available: bytes.len(),
+    };
+    let magic = r.take(4).ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+    if magic != consts::MAGIC {
+        return Err(Error::ContainerBadMagic);
+    }
+    let found = r.u8().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+    if found != version {
+        return Err(if found == consts::VERSION_SHOW {
+            Error::ContainerIsShow
+        } else {
+            Error::ContainerUnsupportedVersion { version: found }
+        });
+    }
+    let flags = r.u8().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+    if flags != 0 {
+        return Err(Error::ContainerUnsupportedFlags { flags });
+    }
+    let count = r.u16_le().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
+    if count == 0 || usize::from(count) > max_sections {
+        return Err(Error::ContainerSectionCount { count });
+    }
+    let body_start = PREAMBLE_LEN.wrapping_add(usize::from(count).wrapping_mul(SECTION_ENTRY_LEN));
+    let needed = body_start.wrapping_add(CRC_LEN);
+    if bytes.len() < needed {
+        return Err(truncated(needed));
+    }
+    let crc_at = bytes.len().wrapping_sub(CRC_LEN);
+    let (body, crc_bytes) = bytes.split_at(crc_at);
+    let stored = match crc_bytes {
+        [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
+        _ => return Err(truncated(needed)),
+    };
+    let computed = wire::crc32(body);
+    if stored != computed {
+        return Err(Error::ContainerCrcMismatch { stored, computed });
+    }
+    Ok((count, body_start, crc_at))
 }
 
 /// A parsed, validated clip borrowing its bytes (zero copy).
@@ -68,49 +119,15 @@ impl<'a> Clip<'a> {
     /// Validates a whole clip: container, CRC, header and codec section
     /// (SPEC.md §2–§4). After this succeeds every frame can be decoded.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
-        let mut r = Reader::new(bytes);
-        let truncated = |needed: usize| Error::ContainerTruncated {
-            needed,
-            available: bytes.len(),
-        };
-        let magic = r.take(4).ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
-        if magic != consts::MAGIC {
-            return Err(Error::ContainerBadMagic);
-        }
-        let version = r.u8().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
-        if version != consts::VERSION {
-            return Err(Error::ContainerUnsupportedVersion { version });
-        }
-        let flags = r.u8().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
-        if flags != 0 {
-            return Err(Error::ContainerUnsupportedFlags { flags });
-        }
-        let count = r.u16_le().ok_or(truncated(PREAMBLE_LEN + CRC_LEN))?;
-        if count == 0 || usize::from(count) > MAX_SECTIONS {
-            return Err(Error::ContainerSectionCount { count });
-        }
-        let body_start = PREAMBLE_LEN.wrapping_add(usize::from(count) * SECTION_ENTRY_LEN);
-        let needed = body_start.wrapping_add(CRC_LEN);
-        if bytes.len() < needed {
-            return Err(truncated(needed));
-        }
-        let crc_at = bytes.len().wrapping_sub(CRC_LEN);
-        let (body, crc_bytes) = bytes.split_at(crc_at);
-        let stored = match crc_bytes {
-            [a, b, c, d] => u32::from_le_bytes([*a, *b, *c, *d]),
-            _ => return Err(truncated(needed)),
-        };
-        let computed = wire::crc32(body);
-        if stored != computed {
-            return Err(Error::ContainerCrcMismatch { stored, computed });
-        }
-
+        let (count, body_start, crc_at) = open_container(bytes, consts::VERSION, MAX_SECTIONS)?;
+        let mut r = Reader::new(bytes.get(PREAMBLE_LEN..).unwrap_or(&[]));
+        let table_at = PREAMBLE_LEN;
         let mut seen = [false; 256];
         let mut header = None;
         let mut codec = None;
         let mut rig = None;
         for _ in 0..count {
-            let at = r.pos();
+            let at = table_at.wrapping_add(r.pos());
             let id = bytes.get(at).copied().unwrap_or(0);
             let (id, range) = read_entry(&mut r).ok_or(Error::ContainerSectionBounds { id })?;
             if range.start < body_start || range.end > crc_at {
@@ -179,12 +196,32 @@ impl<'a> Clip<'a> {
         })
     }
 
+    /// A clip of a show (SPEC.md §9.2): the show's bytes, header (with the
+    /// clip's frame count) and rig, and the clip's validated codec section.
+    pub(crate) fn of_show(
+        bytes: &'a [u8],
+        section_count: u16,
+        header: Header<'a>,
+        rig: Option<Rig<'a>>,
+        codec_id: u8,
+        codec: Codec<'a>,
+    ) -> Self {
+        Clip {
+            bytes,
+            section_count,
+            header,
+            codec_id,
+            rig,
+            codec,
+        }
+    }
+
     /// The header: timing, skeleton, channel table.
     pub fn header(&self) -> &Header<'a> {
         &self.header
     }
 
-    /// The whole clip's bytes.
+    /// The whole clip's bytes (a show's clip: the whole show's).
     pub fn bytes(&self) -> &'a [u8] {
         self.bytes
     }
@@ -217,7 +254,8 @@ impl<'a> Clip<'a> {
         self.codec
     }
 
-    /// All sections, in table order (ancillary ones included).
+    /// All sections, in table order (ancillary ones included; a show's clip:
+    /// all the show's sections).
     pub fn sections(&self) -> Sections<'a> {
         Sections {
             file: self.bytes,

@@ -5,6 +5,24 @@
 pub const MAGIC: [u8; 4] = *b"MOCB";
 /// Current bitstream version, SPEC.md §2.1.
 pub const VERSION: u8 = 1;
+/// Bitstream version of a show (many clips, SPEC.md §9).
+pub const VERSION_SHOW: u8 = 2;
+/// Largest number of sections a show may declare (§9.1).
+pub const MAX_SHOW_SECTIONS: usize = 1024;
+/// Largest number of clips in a show (§9.2).
+pub const MAX_SHOW_CLIPS: usize = 255;
+/// Longest clip name in a show, bytes (§9.2).
+pub const MAX_CLIP_NAME: usize = 31;
+/// Most shared model sections one show clip reads (§9.2).
+pub const MAX_CLIP_MODELS: usize = 4;
+/// Section id of a show's clip directory, §9.2.
+pub const SECTION_SHOW: u8 = 0x04;
+/// Section id of a show's cue lists and triggers, §9.5.
+pub const SECTION_CUES: u8 = 0x05;
+/// First and last section ids of shared model sections, §9.1.
+pub const SECTION_MODEL_FIRST: u8 = 0x20;
+/// Last id of the shared model sections, §9.1.
+pub const SECTION_MODEL_LAST: u8 = 0x2F;
 /// Bytes before the section table: magic(4) version(1) flags(1) count(2).
 pub const PREAMBLE_LEN: usize = 8;
 /// Bytes per section-table entry: id(1) reserved(3) offset(4) length(4).

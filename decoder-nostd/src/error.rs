@@ -17,6 +17,9 @@ pub enum Error {
     },
     /// The first four bytes are not `MOCB` (§2.1).
     ContainerBadMagic,
+    /// The file is a show (version 2, §9): read it with
+    /// [`Show::parse`](crate::Show::parse), not as one clip.
+    ContainerIsShow,
     /// A version this decoder does not know (§2.1).
     ContainerUnsupportedVersion {
         /// The version byte found.
@@ -141,6 +144,30 @@ pub enum Error {
         /// Which rule of §5b is broken.
         rule: &'static str,
     },
+    /// The show table breaks a rule of §9.2.
+    ShowMalformed {
+        /// Byte offset inside the show table.
+        offset: usize,
+    },
+    /// A clip's codec reference is not a codec section, or a codec section
+    /// is no clip's or two clips' (§9.2).
+    ShowClipCodec {
+        /// The clip (position in the show table); its count for a codec
+        /// section no clip names.
+        clip: u16,
+    },
+    /// A clip number past the show's clips.
+    ShowClipOutOfRange {
+        /// The number asked for.
+        clip: u16,
+        /// Clips in the show.
+        clips: u16,
+    },
+    /// The cue section breaks a rule of §9.5.
+    ShowCuesMalformed {
+        /// Byte offset inside the cue section.
+        offset: usize,
+    },
     /// The player's state is too small for the codec's state (the
     /// `predictive` codec needs `3·C + 19` words).
     PlayerStateTooSmall {
@@ -187,6 +214,9 @@ impl fmt::Display for Error {
                 "clip truncated: needs {needed} bytes, {available} available"
             ),
             Error::ContainerBadMagic => f.write_str("not a .mcb clip (bad magic)"),
+            Error::ContainerIsShow => {
+                f.write_str("this file is a show (version 2): read it as a show, not as one clip")
+            }
             Error::ContainerUnsupportedVersion { version } => {
                 write!(f, "unsupported bitstream version {version}")
             }
@@ -239,6 +269,16 @@ impl fmt::Display for Error {
             ),
             Error::PcaMalformed { rule } => write!(f, "pca-spline codec: {rule}"),
             Error::PredictiveMalformed { rule } => write!(f, "predictive codec: {rule}"),
+            Error::ShowMalformed { offset } => write!(f, "malformed show table at byte {offset}"),
+            Error::ShowClipCodec { clip } => {
+                write!(f, "show clip {clip}: no codec section of its own")
+            }
+            Error::ShowClipOutOfRange { clip, clips } => {
+                write!(f, "show clip {clip} out of range (the show has {clips})")
+            }
+            Error::ShowCuesMalformed { offset } => {
+                write!(f, "malformed cue section at byte {offset}")
+            }
             Error::PlayerStateTooSmall { needed, capacity } => write!(
                 f,
                 "the codec needs {needed} words of player state, player capacity is {capacity}"

@@ -302,6 +302,13 @@ impl<'a> Header<'a> {
         })
     }
 
+    /// The same header with another frame count: a show's clip (SPEC.md
+    /// §9.2) shares the show's header but has its own length.
+    pub(crate) fn with_frame_count(mut self, frames: u32) -> Self {
+        self.frame_count = frames;
+        self
+    }
+
     /// Nanoseconds per frame.
     pub fn frame_time_ns(&self) -> u32 {
         self.frame_time_ns

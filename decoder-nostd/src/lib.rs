@@ -39,6 +39,7 @@ mod header;
 mod player;
 mod reader;
 mod rig;
+pub mod show;
 #[doc(hidden)]
 pub mod wire;
 
@@ -47,6 +48,9 @@ pub use error::Error;
 pub use header::{Channel, ChannelIter, ChannelKind, Header, Joint, JointIter, Unit};
 pub use player::Player;
 pub use rig::{rig_digest, tick_count, tick_us, DigestServo, Rig, RigServo, DIGEST_SERVO_LEN};
+pub use show::player::{Now, ShowPlayer, State};
+pub use show::runner::{Command, Output, ShowRunner};
+pub use show::{Loop, Show, ShowClip};
 
 /// The fixed-point key-frame spline of the `pca-spline` codec (SPEC.md
 /// §5.4), public so the encoder fits exactly what the decoder evaluates.

@@ -53,6 +53,37 @@ pub struct ChannelWire {
 }
 
 impl HeaderWire {
+    /// The header a decoded clip describes (its skeleton, timing and channel
+    /// table), to write again — a show's shared header (SPEC.md §9.1).
+    pub fn from_decoded(h: &mocap_decoder::Header<'_>) -> HeaderWire {
+        HeaderWire {
+            frame_time_ns: h.frame_time_ns(),
+            frame_count: h.frame_count(),
+            source_unit_nm: h.source_unit_nm(),
+            joints: h
+                .joints()
+                .map(|j| JointWire {
+                    name: j.name.to_string(),
+                    parent: j.parent,
+                    offset_um: j.offset_um,
+                    end_site: j.end_site,
+                    kinds: j.channel_kinds().map(|k| k.code()).collect(),
+                })
+                .collect(),
+            channels: h
+                .channels()
+                .map(|c| ChannelWire {
+                    unit: match c.unit {
+                        mocap_decoder::Unit::Millidegree => consts::unit::MILLIDEGREE,
+                        mocap_decoder::Unit::Micrometre => consts::unit::MICROMETRE,
+                    },
+                    min: c.min,
+                    max: c.max,
+                })
+                .collect(),
+        }
+    }
+
     /// The header of `m`, with channel ranges taken from the decoded values
     /// (`decoded[channel][frame]`).
     pub fn new(m: &Motion, metres_per_unit: f64, decoded: &FixedChannels) -> HeaderWire {
@@ -192,12 +223,18 @@ pub fn zigzag(out: &mut Vec<u8>, v: i32) {
     varint(out, mocap_decoder::wire::zigzag_encode(v));
 }
 
-/// Assembles sections into a container: preamble, section table, payloads
-/// in table order, CRC-32.
+/// Assembles sections into a clip container (version 1): preamble, section
+/// table, payloads in table order, CRC-32.
 pub fn assemble(sections: &[(u8, Vec<u8>)]) -> Vec<u8> {
+    assemble_version(consts::VERSION, sections)
+}
+
+/// Assembles sections into a container of `version` (1: a clip, SPEC.md
+/// §2; 2: a show, §9.1).
+pub fn assemble_version(version: u8, sections: &[(u8, Vec<u8>)]) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&consts::MAGIC);
-    out.push(consts::VERSION);
+    out.push(version);
     out.push(0); // flags
     out.extend_from_slice(&(sections.len() as u16).to_le_bytes());
     let mut offset = PREAMBLE_LEN + sections.len() * SECTION_ENTRY_LEN;

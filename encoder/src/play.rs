@@ -335,7 +335,7 @@ pub fn servo_stream(
 /// servo returned to neutral at its speed limit. The playback starts at
 /// neutral (the servos' real position at power-on is unknown): the first
 /// ticks move towards the clip's first pose at the speed limit.
-fn drive(
+pub(crate) fn drive(
     targets: impl IntoIterator<Item = Vec<u16>>,
     servos: &[RigServo],
     rate_mhz: u32,

@@ -7,6 +7,8 @@
 //! `predictive` example (§7.3–§7.6), byte for byte, from the motion its
 //! prose names.
 
+// Shared with spec_examples.rs; each test crate uses part of it.
+#[allow(dead_code)]
 mod spec_reference;
 
 use mocap_decoder::{Clip, Error, Player};

@@ -11,6 +11,7 @@ pub mod generate;
 pub mod info;
 pub mod play;
 pub mod send;
+pub mod show;
 pub mod track;
 
 use std::path::{Path, PathBuf};

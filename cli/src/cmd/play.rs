@@ -34,6 +34,15 @@ pub struct Args {
     /// Servo ticks per second (default: the rig's rate_hz).
     #[arg(long)]
     rate: Option<f64>,
+    /// A show (SPEC.md §9): the command script to run it with (one
+    /// `<seconds> <command>` per line: list, trigger, play, fade, queue,
+    /// loop, hold, resume, stop, end). Without one, the show's first cue
+    /// list runs (or its first clip plays).
+    #[arg(long)]
+    cues: Option<PathBuf>,
+    /// A show: the most seconds it plays when its script has no `end`.
+    #[arg(long, default_value_t = 600.0)]
+    duration: f64,
 }
 
 /// `--policy`: `mocap_servo::Policy` as a command-line value.
@@ -63,12 +72,23 @@ pub fn run(a: Args) -> super::Result {
         ProtocolArg::Ssc32 => Protocol::Ssc32,
     };
     let bytes = read_clip(&a.clip)?;
-    let c = parse_clip(&a.clip, &bytes)?;
     let policy = match a.policy {
         PolicyArg::Refuse => Policy::Refuse,
         PolicyArg::ClampIfInside => Policy::ClampIfInside,
         PolicyArg::Clamp => Policy::ClampAlways,
     };
+    if bytes.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
+        let s = play_show(&a, &bytes, protocol, policy)?;
+        return send(&a, &s);
+    }
+    if a.cues.is_some() {
+        return Err(format!(
+            "{}: --cues plays a show (mocap show build); this is one clip",
+            a.clip.display()
+        )
+        .into());
+    }
+    let c = parse_clip(&a.clip, &bytes)?;
     let s = match &a.rig {
         Some(rig) if c.rig().is_some() => {
             let figure = Figure::from_rig(&Rig::read_file(rig)?, policy);
@@ -80,6 +100,67 @@ pub fn run(a: Args) -> super::Result {
         }
         None => play::servo_clip_stream(&c, protocol, a.rate)?,
     };
+    send(&a, &s)
+}
+
+/// A show run by its command script (or its first cue list) at the rig's
+/// rate, its output events on stderr.
+fn play_show(
+    a: &Args,
+    bytes: &[u8],
+    protocol: Protocol,
+    policy: Policy,
+) -> super::Result<play::ServoStream> {
+    use mocap_encoder::show::play::{show_stream, Script};
+    let show =
+        mocap_decoder::Show::parse(bytes).map_err(|e| format!("{}: {e}", a.clip.display()))?;
+    if a.rate.is_some() {
+        return Err("a show plays at its rig's rate (no --rate)".into());
+    }
+    let script = match &a.cues {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            Script::parse(&text, &p.display().to_string(), &show)?
+        }
+        None => {
+            use mocap_decoder::Command;
+            let first = match show.cues().filter(|c| c.list_count() > 0) {
+                Some(_) => Command::List(0),
+                None => Command::Play(0),
+            };
+            Script {
+                commands: vec![(0, first)],
+                end_us: None,
+            }
+        }
+    };
+    let rig = a.rig.as_ref().map(|r| Rig::read_file(r)).transpose()?;
+    let figure = match (&rig, show.rig()) {
+        (Some(r), Some(_)) => Some(Figure::from_rig(r, policy)),
+        _ => None,
+    };
+    let motion_rig = if show.rig().is_none() {
+        rig.as_ref()
+    } else {
+        None
+    };
+    let played = show_stream(
+        &show,
+        &script,
+        protocol,
+        motion_rig,
+        figure.as_ref(),
+        a.duration,
+    )?;
+    for (_, line) in &played.events {
+        eprintln!("{line}");
+    }
+    Ok(played.stream)
+}
+
+/// Writes a played stream to the port or file, Ctrl-C returning every
+/// servo to rest.
+fn send(a: &Args, s: &play::ServoStream) -> super::Result {
     if let Some(t) = &s.tracks {
         eprint!("{t}");
     }

@@ -2,7 +2,6 @@
 //! placed at its line and column.
 
 use serde::Deserialize;
-use std::fmt;
 use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
@@ -13,63 +12,11 @@ use super::*;
 // Errors and positions
 // ---------------------------------------------------------------------------
 
-/// A 1-based line and column (in characters) in a rig file.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Position {
-    /// 1-based line (0 when unknown).
-    pub line: usize,
-    /// 1-based column in characters (0 when unknown).
-    pub column: usize,
-}
+pub use crate::located::Position;
 
-impl Position {
-    /// The position of byte offset `byte` in `text` (clamped to the text,
-    /// and moved back to a character boundary).
-    pub fn of_byte(text: &str, byte: usize) -> Position {
-        let mut b = byte.min(text.len());
-        while !text.is_char_boundary(b) {
-            b -= 1;
-        }
-        let before = &text[..b];
-        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-        Position {
-            line: before.matches('\n').count() + 1,
-            column: before[line_start..].chars().count() + 1,
-        }
-    }
-}
-
-/// A rig error: `file:line:column: message`.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct RigError {
-    /// The rig file name as given to the reader.
-    pub file: String,
-    /// 1-based line (0 for I/O errors).
-    pub line: usize,
-    /// 1-based column in characters (0 for I/O errors).
-    pub column: usize,
-    /// What went wrong.
-    pub message: String,
-}
-
-impl RigError {
-    pub(super) fn at(file: &str, pos: Position, message: impl Into<String>) -> RigError {
-        RigError {
-            file: file.to_string(),
-            line: pos.line,
-            column: pos.column,
-            message: message.into(),
-        }
-    }
-}
-
-impl fmt::Display for RigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        crate::located::write_located(f, &self.file, self.line, self.column, &self.message)
-    }
-}
-
-impl std::error::Error for RigError {}
+/// A rig error: `file:line:column: message` (the readers' one located
+/// error type).
+pub type RigError = crate::located::LocatedError;
 
 // Required keys are `Option`s here so that a missing key is reported at its
 // table (the `toml` crate gives no position for a missing field).

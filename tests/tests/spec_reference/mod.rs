@@ -46,71 +46,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
         }
     }
     let (header_id, header) = header.expect("a header");
-    let mut r = Reader::new(header);
-    let mut frame_time_ns = r.varint();
-    let (frame_count, channels);
-    if header_id == 0x01 {
-        // §3.1: postcard.
-        frame_count = r.varint();
-        let _source_unit_nm = r.varint();
-        let joints = r.varint();
-        let mut kinds = 0;
-        for _ in 0..joints {
-            let name = r.varint() as usize;
-            r.take(name);
-            match r.u8() {
-                0 => {}
-                1 => {
-                    r.varint();
-                }
-                b => panic!("option byte {b}"),
-            }
-            for _ in 0..3 {
-                r.zigzag();
-            }
-            assert!(r.u8() <= 1, "bool");
-            let n = r.varint() as usize;
-            r.take(n);
-            kinds += n;
-        }
-        channels = r.varint() as usize;
-        assert_eq!(channels, kinds, "one channel per kind");
-        for _ in 0..channels {
-            r.u8();
-            let (min, max) = (r.zigzag(), r.zigzag());
-            assert!(min <= max);
-        }
-    } else if frame_time_ns == 0 {
-        // §3.4.1 servo form.
-        frame_time_ns = r.varint();
-        frame_count = r.varint();
-        channels = r.varint() as usize;
-    } else {
-        frame_count = r.varint();
-        let _source_unit_nm = r.varint();
-        let joints = r.varint();
-        let mut c = 0;
-        for _ in 0..joints {
-            let flags = r.u8();
-            let kinds = usize::from(flags & 7);
-            if flags & 0x10 != 0 {
-                r.varint(); // back
-            }
-            let name = r.varint() as usize;
-            r.take(name);
-            for _ in 0..3 {
-                r.zigzag();
-            }
-            r.take(kinds);
-            c += kinds;
-        }
-        for _ in 0..c {
-            r.zigzag();
-            r.varint();
-        }
-        channels = c;
-    }
-    assert!(r.done(), "header trailing bytes");
+    let (frame_time_ns, frame_count, channels) = header_counts(header_id, header);
     let (id, section) = codec.expect("a codec section");
     let codec = match id {
         0x10 => Codec::Index(Index::parse(section, channels)),
@@ -847,4 +783,148 @@ impl<'a> RangeDecoder<'a> {
             a
         }
     }
+}
+
+/// §3.1 / §3.4: frame time, frame count and channel count of header
+/// section `header_id`.
+fn header_counts(header_id: u8, header: &[u8]) -> (u32, u32, usize) {
+    let mut r = Reader::new(header);
+    let mut frame_time_ns = r.varint();
+    let (frame_count, channels);
+    if header_id == 0x01 {
+        // §3.1: postcard.
+        frame_count = r.varint();
+        let _source_unit_nm = r.varint();
+        let joints = r.varint();
+        let mut kinds = 0;
+        for _ in 0..joints {
+            let name = r.varint() as usize;
+            r.take(name);
+            match r.u8() {
+                0 => {}
+                1 => {
+                    r.varint();
+                }
+                b => panic!("option byte {b}"),
+            }
+            for _ in 0..3 {
+                r.zigzag();
+            }
+            assert!(r.u8() <= 1, "bool");
+            let n = r.varint() as usize;
+            r.take(n);
+            kinds += n;
+        }
+        channels = r.varint() as usize;
+        assert_eq!(channels, kinds, "one channel per kind");
+        for _ in 0..channels {
+            r.u8();
+            let (min, max) = (r.zigzag(), r.zigzag());
+            assert!(min <= max);
+        }
+    } else if frame_time_ns == 0 {
+        // §3.4.1 servo form.
+        frame_time_ns = r.varint();
+        frame_count = r.varint();
+        channels = r.varint() as usize;
+    } else {
+        frame_count = r.varint();
+        let _source_unit_nm = r.varint();
+        let joints = r.varint();
+        let mut c = 0;
+        for _ in 0..joints {
+            let flags = r.u8();
+            let kinds = usize::from(flags & 7);
+            if flags & 0x10 != 0 {
+                r.varint(); // back
+            }
+            let name = r.varint() as usize;
+            r.take(name);
+            for _ in 0..3 {
+                r.zigzag();
+            }
+            r.take(kinds);
+            c += kinds;
+        }
+        for _ in 0..c {
+            r.zigzag();
+            r.varint();
+        }
+        channels = c;
+    }
+    assert!(r.done(), "header trailing bytes");
+    (frame_time_ns, frame_count, channels)
+}
+
+/// §9: a show's clips, by name, each a [`Clip`] of the shared header's
+/// channels with its own frame count and codec section (§9.2).
+pub fn parse_show(bytes: &[u8]) -> Vec<(String, Clip)> {
+    assert_eq!(&bytes[..4], b"MOCB", "magic");
+    assert_eq!(bytes[4..6], [2, 0], "version 2, flags 0");
+    let n = usize::from(u16::from_le_bytes([bytes[6], bytes[7]]));
+    let (body, crc) = bytes.split_at(bytes.len() - 4);
+    assert_eq!(
+        u32::from_le_bytes(crc.try_into().unwrap()),
+        crc32(body),
+        "CRC"
+    );
+    let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+    let sections: Vec<(u8, &[u8])> = (0..n)
+        .map(|e| {
+            let entry = 8 + 12 * e;
+            assert_eq!(bytes[entry + 1..entry + 4], [0, 0, 0], "reserved");
+            let (offset, len) = (u32_at(entry + 4), u32_at(entry + 8));
+            (bytes[entry], &bytes[offset..offset + len])
+        })
+        .collect();
+    let (header_id, header) = *sections
+        .iter()
+        .find(|(id, _)| matches!(id, 0x01 | 0x02))
+        .expect("a header");
+    let (frame_time_ns, total, channels) = header_counts(header_id, header);
+    let table = sections
+        .iter()
+        .find(|(id, _)| *id == 0x04)
+        .expect("a show table")
+        .1;
+    let mut r = Reader::new(table);
+    let count = r.varint();
+    let mut clips = Vec::new();
+    let mut sum = 0;
+    for _ in 0..count {
+        let len = r.varint() as usize;
+        let name = String::from_utf8(r.take(len).to_vec()).unwrap();
+        let codec_at = r.varint() as usize;
+        let frame_count = r.varint();
+        if r.u8() & 1 == 1 {
+            let (start, end, seam) = (r.varint(), r.varint(), r.varint());
+            assert!(
+                start < end && end < frame_count && seam < end - start,
+                "loop points"
+            );
+        }
+        for _ in 0..r.varint() {
+            r.varint(); // shared model sections: no codec reads one yet
+        }
+        let (id, section) = sections[codec_at];
+        let codec = match id {
+            0x10 => Codec::Index(Index::parse(section, channels)),
+            0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
+            0x12 => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
+            id => panic!("clip {name}: section {id:#04x} is no codec"),
+        };
+        sum += frame_count;
+        clips.push((
+            name,
+            Clip {
+                frame_time_ns,
+                frame_count,
+                channels,
+                codec,
+            },
+        ));
+    }
+    assert!(r.done(), "show table trailing bytes");
+    assert_eq!(sum, total, "the header counts every clip's frames");
+    clips
 }

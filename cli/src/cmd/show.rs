@@ -1,0 +1,53 @@
+//! `mocap show build`: a show file (TOML: clips, rig, transitions, cue lists,
+//! triggers) into one show `.mcb` (SPEC.md §9), every clip's bound proven.
+
+use std::path::PathBuf;
+
+use mocap_encoder::show::{self, file::ShowSpec};
+
+use super::write;
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(clap::Subcommand)]
+enum Command {
+    /// Encode every clip of a show file and assemble them into one show .mcb.
+    Build(BuildArgs),
+}
+
+#[derive(clap::Args)]
+struct BuildArgs {
+    /// The show file (TOML; schema in assets/shows/README.md).
+    input: PathBuf,
+    /// Output .mcb show.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+pub fn run(a: Args) -> super::Result {
+    match a.command {
+        Command::Build(b) => build(b),
+    }
+}
+
+fn build(a: BuildArgs) -> super::Result {
+    let spec = ShowSpec::read_file(&a.input)?;
+    eprintln!(
+        "{}: show `{}`, {} clips{}; encoding…",
+        a.input.display(),
+        spec.name,
+        spec.clips.len(),
+        spec.rig
+            .as_ref()
+            .map(|r| format!(" on the rig {}", r.display()))
+            .unwrap_or_default()
+    );
+    let built = show::build(&spec)?;
+    write(&a.output, &built.bytes)?;
+    print!("{}", show::report(&a.output, &spec, &built));
+    Ok(())
+}

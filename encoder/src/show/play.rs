@@ -1,0 +1,249 @@
+//! `mocap play` of a show: the show's [`ShowRunner`] (cue lists, triggers,
+//! idle clips) driven by a command script at the rig's tick rate, each
+//! tick's pose through the one servo playback loop ([`crate::play`]) — the
+//! firmware's show mode runs the same code on the same commands.
+//!
+//! A script (`--cues cues.txt`) has one command per line, `#` comments:
+//!
+//! ```text
+//! 0      list main        # start a cue list
+//! 3.2    trigger 1        # input 1 fires
+//! 5      play talk        # play / fade <clip> <ms> / queue <clip>
+//! 6      fade wave 400
+//! 8      loop on          # loop on|off, hold, resume, stop
+//! 20     end              # stop the show here (default: when it is done)
+//! ```
+
+use mocap_decoder::show::runner::{Command, Output};
+use mocap_decoder::{tick_us, Show, ShowRunner};
+
+use super::{MAX_CHANNELS, PLAYER_WORDS};
+use crate::located::{LocatedError, Position};
+use crate::play::{self, Figure, PlayError, Protocol, ServoStream};
+use crate::rig::{Rig, Servo};
+use crate::{clipfile, fixed, servo_clip};
+
+/// The host's show runner.
+pub type HostShowRunner<'a> = ShowRunner<'a, PLAYER_WORDS, MAX_CHANNELS>;
+
+/// A command script: commands at show times, and where to end.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Script {
+    /// Commands and their show times, µs, in time order.
+    pub commands: Vec<(u64, Command)>,
+    /// `end` at this time, µs.
+    pub end_us: Option<u64>,
+}
+
+impl Script {
+    /// Parses a script for `show` (clip and list names resolved); `file`
+    /// only names the script in errors.
+    pub fn parse(text: &str, file: &str, show: &Show<'_>) -> Result<Script, LocatedError> {
+        let cues = show.cues();
+        let mut script = Script::default();
+        for (n, raw) in text.lines().enumerate() {
+            let line = raw.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let at = |msg: String| {
+                LocatedError::at(
+                    file,
+                    Position {
+                        line: n + 1,
+                        column: 1,
+                    },
+                    msg,
+                )
+            };
+            let words: Vec<&str> = line.split_whitespace().collect();
+            let t: f64 = words[0]
+                .trim_end_matches('s')
+                .parse()
+                .ok()
+                .filter(|t: &f64| t.is_finite() && *t >= 0.0)
+                .ok_or_else(|| at(format!("`{}` is not a time in seconds", words[0])))?;
+            let t_us = (t * 1e6).round() as u64;
+            if script.commands.last().is_some_and(|(last, _)| *last > t_us) {
+                return Err(at("commands must be in time order".into()));
+            }
+            let clip = |k: usize| -> Result<u16, LocatedError> {
+                let name = words.get(k).ok_or_else(|| at("which clip?".into()))?;
+                show.find(name)
+                    .ok_or_else(|| at(format!("the show has no clip `{name}`")))
+            };
+            let arity = |k: usize| {
+                if words.len() == k {
+                    Ok(())
+                } else {
+                    Err(at(format!("`{}` takes {} argument(s)", words[1], k - 2)))
+                }
+            };
+            let cmd = match words.get(1).copied() {
+                Some("end") => {
+                    arity(2)?;
+                    script.end_us = Some(t_us);
+                    continue;
+                }
+                Some("list") => {
+                    arity(3)?;
+                    let name = words[2];
+                    Command::List(
+                        cues.and_then(|c| c.find_list(name))
+                            .ok_or_else(|| at(format!("the show has no cue list `{name}`")))?,
+                    )
+                }
+                Some("trigger") => {
+                    arity(3)?;
+                    Command::Trigger(
+                        words[2]
+                            .parse()
+                            .map_err(|_| at(format!("`{}` is not an input number", words[2])))?,
+                    )
+                }
+                Some("play") => {
+                    arity(3)?;
+                    Command::Play(clip(2)?)
+                }
+                Some("fade") => {
+                    arity(4)?;
+                    Command::Fade {
+                        clip: clip(2)?,
+                        ms: words[3]
+                            .trim_end_matches("ms")
+                            .parse()
+                            .map_err(|_| at(format!("`{}` is not milliseconds", words[3])))?,
+                    }
+                }
+                Some("queue") => {
+                    arity(3)?;
+                    Command::Queue(clip(2)?)
+                }
+                Some("loop") => {
+                    arity(3)?;
+                    Command::Loop(match words[2] {
+                        "on" => true,
+                        "off" => false,
+                        w => return Err(at(format!("loop on or off, not `{w}`"))),
+                    })
+                }
+                Some("hold") => {
+                    arity(2)?;
+                    Command::Hold
+                }
+                Some("resume") => {
+                    arity(2)?;
+                    Command::Resume
+                }
+                Some("stop") => {
+                    arity(2)?;
+                    Command::Stop
+                }
+                Some(w) => return Err(at(format!(
+                    "unknown command `{w}` (list, trigger, play, fade, queue, loop, hold, resume, stop, end)"
+                ))),
+                None => return Err(at("a time and a command".into())),
+            };
+            script.commands.push((t_us, cmd));
+        }
+        Ok(script)
+    }
+}
+
+/// A played show: the servo stream and the cues' output events.
+#[derive(Clone, Debug)]
+pub struct ShowPlay {
+    /// The ticks' bytes and pulses (the show, then the return to rest).
+    pub stream: ServoStream,
+    /// Output events (`gpio`, `serial` cues) and their show times, µs, as
+    /// the firmware prints them (`# event …`).
+    pub events: Vec<(u64, String)>,
+}
+
+/// The line an output event prints on the host and on the firmware's UART.
+pub fn event_text(t_us: u64, o: &Output<'_>) -> String {
+    match o {
+        Output::Gpio { pin, level } => {
+            format!("# event t_us={t_us} gpio {pin} {}", u8::from(*level))
+        }
+        Output::Serial(bytes) => {
+            let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02x}")).collect();
+            format!("# event t_us={t_us} serial {}", hex.join(" "))
+        }
+    }
+}
+
+/// Most ticks a show plays without an `end` (one hour at 1 kHz).
+pub const MAX_TICKS: u64 = 3_600_000;
+
+/// Plays `show` with `script` at the rig's rate: a servo show on its own rig
+/// table (on `figure`'s hard limits when given), a motion show through
+/// `rig`. It ends at the script's `end`, or after `max_s` seconds, or once
+/// nothing moves any more on its own (no cue list, no queue, the last clip
+/// ended); then every servo returns to rest.
+pub fn show_stream(
+    show: &Show<'_>,
+    script: &Script,
+    protocol: Protocol,
+    rig: Option<&Rig>,
+    figure: Option<&Figure>,
+    max_s: f64,
+) -> Result<ShowPlay, PlayError> {
+    let mut runner = Box::new(HostShowRunner::new(*show)?);
+    let (servos, rate_mhz) = match (show.rig(), rig) {
+        (Some(r), _) => (r.servos().collect::<Vec<_>>(), r.rate_mhz()),
+        (None, Some(rig)) => (
+            rig.servos.iter().map(Servo::rig_servo).collect(),
+            servo_clip::rate_mhz(rig),
+        ),
+        (None, None) => return Err(PlayError::NotAServoClip),
+    };
+    let n = show.header().channel_count();
+    let max_ticks = ((max_s.max(0.0) * f64::from(rate_mhz) / 1000.0) as u64).min(MAX_TICKS);
+    let mut poses: Vec<i32> = Vec::new();
+    let mut events = Vec::new();
+    let mut next = 0;
+    let mut pose = vec![0i32; n];
+    let mut ticks = 0u64;
+    while ticks < max_ticks {
+        let t = tick_us(ticks, rate_mhz);
+        if script.end_us.is_some_and(|e| t > e) {
+            break;
+        }
+        let mut emit = |at: u64, o: Output<'_>| events.push((at, event_text(at, &o)));
+        while let Some((at, cmd)) = script.commands.get(next).filter(|(at, _)| *at <= t) {
+            runner.command(*cmd, *at, &mut emit)?;
+            next += 1;
+        }
+        runner.tick(t, &mut pose, &mut emit)?;
+        poses.extend_from_slice(&pose);
+        ticks += 1;
+        if script.end_us.is_none() && next >= script.commands.len() && runner.is_done() {
+            break;
+        }
+    }
+    let targets: Vec<Vec<u16>> = match show.rig() {
+        Some(_) => poses
+            .chunks(n.max(1))
+            .map(|p| servos.iter().zip(p).map(|(s, &v)| s.pulse_qus(v)).collect())
+            .collect(),
+        None => {
+            let rig = rig.ok_or(PlayError::NotAServoClip)?;
+            let clip = show.clip(0)?;
+            let skeleton = clipfile::skeleton(&clip);
+            let channels = rig.resolve(&skeleton)?;
+            let metres = f64::from(show.header().source_unit_nm()) * 1e-9;
+            let motion = fixed::from_fixed(&skeleton, 1000.0 / f64::from(rate_mhz), &poses, metres);
+            let tracks = rig.servo_tracks(&motion, &channels, metres);
+            (0..ticks as usize)
+                .map(|i| tracks.servos.iter().map(|t| t.pulses[i]).collect())
+                .collect()
+        }
+    };
+    let identity = match figure {
+        Some(f) => Some((f, f.id().compare(&show.clip(0)?))),
+        None => None,
+    };
+    let stream = play::drive(targets, &servos, rate_mhz, protocol, None, identity)?;
+    Ok(ShowPlay { stream, events })
+}
