@@ -48,6 +48,7 @@ pub use error::Error;
 pub use header::{Channel, ChannelIter, ChannelKind, Header, Joint, JointIter, Unit};
 pub use player::Player;
 pub use rig::{rig_digest, tick_count, tick_us, DigestServo, Rig, RigServo, DIGEST_SERVO_LEN};
+pub use show::clock::ShowClock;
 pub use show::player::{Now, ShowPlayer, State};
 pub use show::runner::{Command, Output, ShowRunner};
 pub use show::{Loop, Show, ShowClip};

@@ -12,6 +12,7 @@
 
 mod board;
 mod servo;
+mod show;
 mod stream;
 mod text;
 
@@ -50,6 +51,11 @@ mod decoder_glue {
     #[inline(never)]
     pub fn parse(bytes: &[u8]) -> Result<Clip<'_>, Error> {
         Clip::parse(bytes)
+    }
+
+    #[inline(never)]
+    pub fn parse_show(bytes: &[u8]) -> Result<mocap_decoder::Show<'_>, Error> {
+        mocap_decoder::Show::parse(bytes)
     }
 
     #[inline(never)]
@@ -333,6 +339,20 @@ fn print_pass(clip: &Clip<'static>, text: &mut Out) -> Result<u32, Failure> {
 fn run(text: &mut Out) -> Result<(), Failure> {
     let calibration_ticks = calibrate();
 
+    if CLIP.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
+        // A show (SPEC.md §9): its clips share the figure's rig table.
+        let show = decoder_glue::parse_show(CLIP).map_err(|e| Failure::Decoder("parse", e))?;
+        let first = show.clip(0).map_err(|e| Failure::Decoder("parse", e))?;
+        let rig = servo::playback_of(&first, text)?;
+        return servo::drive(
+            rig,
+            show::ShowMode {
+                show,
+                calibration_ticks,
+            },
+            text,
+        );
+    }
     let t0 = ticks::now();
     let clip = decoder_glue::parse(CLIP).map_err(|e| Failure::Decoder("parse", e))?;
     let parse_ticks = ticks::since(t0, ticks::now());

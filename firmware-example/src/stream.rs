@@ -98,7 +98,7 @@ pub enum State {
 }
 
 /// A received message, copied out of the frame receiver.
-enum Event {
+pub(crate) enum Event {
     Hello,
     Chunk {
         offset: u32,
@@ -113,6 +113,17 @@ enum Event {
         pulses: heapless::Vec<u16, MAX_POSE_SERVOS>,
     },
     Stop,
+    /// A show command (the show mode, `crate::show`).
+    Show {
+        at_ms: u32,
+        op: u8,
+        arg: u16,
+        ms: u32,
+    },
+    /// The external show clock's time.
+    Timecode {
+        show_ms: u32,
+    },
     /// A message the MCU does not take (`Status`, a `Hello` of another version).
     Other,
 }
@@ -139,13 +150,20 @@ impl Event {
                 pulses: pulses.clone(),
             },
             Message::Stop => Event::Stop,
+            Message::Show { at_ms, op, arg, ms } => Event::Show {
+                at_ms: *at_ms,
+                op: *op,
+                arg: *arg,
+                ms: *ms,
+            },
+            Message::Timecode { show_ms } => Event::Timecode { show_ms: *show_ms },
             _ => Event::Other,
         }
     }
 }
 
 /// UART → ring → frame receiver, with the resynchronisation figures.
-struct Link {
+pub(crate) struct Link {
     rx: Rx,
     ring: Deque<u8, RING_BYTES>,
     frames: FrameReceiver<MAX_FRAME_LEN>,
@@ -170,7 +188,7 @@ struct Link {
 }
 
 impl Link {
-    fn new(rx: Rx) -> Self {
+    pub(crate) fn new(rx: Rx) -> Self {
         Link {
             rx,
             ring: Deque::new(),
@@ -202,7 +220,7 @@ impl Link {
     }
 
     /// The next accepted message if its last byte has arrived; never waits.
-    fn poll(&mut self) -> Option<Event> {
+    pub(crate) fn poll(&mut self) -> Option<Event> {
         loop {
             self.pump();
             let byte = self.ring.pop_front()?;
@@ -256,7 +274,7 @@ impl Link {
     /// Waits for the next accepted message; `None` once [`TIMEOUT_TICKS`] SysTick ticks pass
     /// without one after the first byte has arrived (never with `STREAM_TIMEOUT_MS` = 0).
     /// Corrupt frames do not count: only an accepted frame is a sign of life.
-    fn wait(&mut self) -> Option<Event> {
+    pub(crate) fn wait(&mut self) -> Option<Event> {
         let mut idle = 0u64;
         let mut last = ticks::now();
         loop {
@@ -495,7 +513,10 @@ fn play<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
                         Ok(_) => session.chunks_duplicate += 1,
                         Err(_) => session.chunks_rejected += 1,
                     },
-                    Event::Play { .. } | Event::Other => session.other_frames += 1,
+                    Event::Play { .. }
+                    | Event::Show { .. }
+                    | Event::Timecode { .. }
+                    | Event::Other => session.other_frames += 1,
                 }
             }
         }
@@ -594,7 +615,8 @@ impl Mode for Stream {
                     None
                 }
                 Event::Stop => break,
-                Event::Other => {
+                // The show mode's frames: no show here.
+                Event::Show { .. } | Event::Timecode { .. } | Event::Other => {
                     s.other_frames += 1;
                     None
                 }

@@ -31,6 +31,8 @@
 //! | 3   | `Pose`      | host → MCU | `seq: u16`, `pulses: [u16]` (≤ 32, quarter-µs)          |
 //! | 4   | `Stop`      | host → MCU | —                                                       |
 //! | 5   | `Status`    | MCU → host | `received: u32`, `dropped: u32`, `last_seq: u16`, `state: u8`, `chunks: u32` |
+//! | 6   | `Show`      | host → MCU | `at_ms: u32`, `op: u8`, `arg: u16`, `ms: u32`: a show command ([`ShowOp`]) |
+//! | 7   | `Timecode`  | host → MCU | `show_ms: u32`: the show clock's time now |
 //!
 //! A message is at most [`MAX_MESSAGE_LEN`] bytes (a `Pose` of 32 pulses of
 //! 3-byte varints) and a frame at most [`MAX_FRAME_LEN`] bytes with its
@@ -50,9 +52,9 @@ use crate::Error;
 
 /// Version carried by `Hello`; bumped on any change of this wire format.
 ///
-/// 2: `Status` carries `chunks`, and chunks of an upload may come in any
+/// 3: `Show` and `Timecode` (the show mode, SPEC.md §8.2). 2: `Status` carries `chunks`, and chunks of an upload may come in any
 /// order and more than once (SPEC.md §8.1). 1: the first version.
-pub const PROTOCOL_VERSION: u8 = 2;
+pub const PROTOCOL_VERSION: u8 = 3;
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0x00;
 /// Most bytes one `ClipChunk` carries.
@@ -118,6 +120,95 @@ pub enum Message<'a> {
         /// the clip has `total.div_ceil(64)`.
         chunks: u32,
     },
+    /// A command to the show in flash, at a show time (SPEC.md §8.2).
+    Show {
+        /// Show time it acts at, ms.
+        at_ms: u32,
+        /// What it does ([`ShowOp`]).
+        op: u8,
+        /// Its clip, cue list, input or on/off.
+        arg: u16,
+        /// A fade's length, ms (0 otherwise).
+        ms: u32,
+    },
+    /// The show clock's time now: the MCU's show clock slews towards it.
+    Timecode {
+        /// Show time, ms.
+        show_ms: u32,
+    },
+}
+
+/// `Show.op` (SPEC.md §8.2): the show commands of `mocap_decoder::Command`,
+/// and `End`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum ShowOp {
+    /// Start cue list `arg`.
+    List = 0,
+    /// Input `arg` fired.
+    Trigger = 1,
+    /// Play clip `arg`.
+    Play = 2,
+    /// Crossfade to clip `arg` over `ms`.
+    Fade = 3,
+    /// Queue clip `arg`.
+    Queue = 4,
+    /// Loop on (`arg` 1) or off (0).
+    Loop = 5,
+    /// Hold.
+    Hold = 6,
+    /// Resume.
+    Resume = 7,
+    /// Stop.
+    Stop = 8,
+    /// The show ends: the servos return to rest.
+    End = 9,
+}
+
+/// A show command as a `Show` message's fields (`End` is not a command).
+pub fn show_message(at_ms: u32, command: mocap_decoder::Command) -> Message<'static> {
+    use mocap_decoder::Command as C;
+    let (op, arg, ms) = match command {
+        C::List(l) => (ShowOp::List, l, 0),
+        C::Trigger(i) => (ShowOp::Trigger, u16::from(i), 0),
+        C::Play(c) => (ShowOp::Play, c, 0),
+        C::Fade { clip, ms } => (ShowOp::Fade, clip, ms),
+        C::Queue(c) => (ShowOp::Queue, c, 0),
+        C::Loop(on) => (ShowOp::Loop, u16::from(on), 0),
+        C::Hold => (ShowOp::Hold, 0, 0),
+        C::Resume => (ShowOp::Resume, 0, 0),
+        C::Stop => (ShowOp::Stop, 0, 0),
+    };
+    Message::Show {
+        at_ms,
+        op: op as u8,
+        arg,
+        ms,
+    }
+}
+
+/// What a `Show` message asks: `Some(Some(command))`, `Some(None)` for
+/// `End`, `None` for an op this version does not know (or an input past
+/// `u8`, a loop flag other than 0 and 1).
+pub fn show_command(op: u8, arg: u16, ms: u32) -> Option<Option<mocap_decoder::Command>> {
+    use mocap_decoder::Command as C;
+    Some(Some(match op {
+        0 => C::List(arg),
+        1 => C::Trigger(u8::try_from(arg).ok()?),
+        2 => C::Play(arg),
+        3 => C::Fade { clip: arg, ms },
+        4 => C::Queue(arg),
+        5 => C::Loop(match arg {
+            0 => false,
+            1 => true,
+            _ => return None,
+        }),
+        6 => C::Hold,
+        7 => C::Resume,
+        8 => C::Stop,
+        9 => return Some(None),
+        _ => return None,
+    }))
 }
 
 impl Message<'_> {

@@ -32,10 +32,25 @@ pub struct Args {
     /// unless --fast) instead of uploading the clip.
     #[arg(long)]
     poses: bool,
+    /// A show (SPEC.md §9) in the firmware's flash: send this command script's commands
+    /// (`mocap play --cues` format) as `Show` frames (SPEC.md §8.2), each a second before
+    /// its time, instead of a clip.
+    #[arg(long, conflicts_with_all = ["poses", "looped"])]
+    cues: Option<PathBuf>,
 }
 
 pub fn run(a: Args) -> super::Result {
     let bytes = read_clip(&a.clip)?;
+    if bytes.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
+        return send_commands(&a, &bytes);
+    }
+    if a.cues.is_some() {
+        return Err(format!(
+            "{}: --cues goes with a show (mocap show build)",
+            a.clip.display()
+        )
+        .into());
+    }
     let c = parse_clip(&a.clip, &bytes)?;
     if a.poses {
         let p = play::pose_frames(&c)?;
@@ -94,6 +109,46 @@ pub fn run(a: Args) -> super::Result {
         "{}: {} pass(es), {} frames, {} bytes",
         dest.display(),
         a.passes,
+        frames.len(),
+        frames.iter().map(Vec::len).sum::<usize>()
+    );
+    Ok(())
+}
+
+/// A show's command script as `Show` frames, paced by their due times.
+fn send_commands(a: &Args, bytes: &[u8]) -> super::Result {
+    use mocap_encoder::show::play::{command_frames, Script};
+    let show =
+        mocap_decoder::Show::parse(bytes).map_err(|e| format!("{}: {e}", a.clip.display()))?;
+    let Some(cues) = &a.cues else {
+        return Err(format!(
+            "{}: a show lives in the firmware's flash; send its commands with --cues cues.txt",
+            a.clip.display()
+        )
+        .into());
+    };
+    let text = std::fs::read_to_string(cues).map_err(|e| format!("{}: {e}", cues.display()))?;
+    let script = Script::parse(&text, &cues.display().to_string(), &show)?;
+    let timed = command_frames(&script)?;
+    let frames: Vec<Vec<u8>> = timed.iter().map(|(_, f)| f.clone()).collect();
+    let (dest, stopped) = a.dest.write(
+        &frames,
+        |i| std::time::Duration::from_micros(timed[i].0),
+        std::time::Duration::ZERO,
+        |_| Ok(vec![play::stop_frame().map_err(|e| e.to_string())?]),
+    )?;
+    if let Some((i, _)) = stopped {
+        return Err(super::Stopped(format!(
+            "{}: after {i} of {} frames; sent Stop",
+            dest.display(),
+            frames.len()
+        ))
+        .into());
+    }
+    eprintln!(
+        "{}: {} commands, {} frames, {} bytes",
+        dest.display(),
+        script.commands.len(),
         frames.len(),
         frames.iter().map(Vec::len).sum::<usize>()
     );

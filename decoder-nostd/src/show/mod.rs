@@ -3,6 +3,7 @@
 //! table naming them, and the cue lists ([`cues`]) — and the player that
 //! runs two of them at once with blends ([`player`]).
 
+pub mod clock;
 pub mod cues;
 pub mod player;
 pub mod runner;

@@ -247,3 +247,51 @@ pub fn show_stream(
     let stream = play::drive(targets, &servos, rate_mhz, protocol, None, identity)?;
     Ok(ShowPlay { stream, events })
 }
+
+/// How long before its time `mocap send` sends a command, µs: the firmware
+/// queues it ([`Command`]s act at their show time) and a late one acts late.
+pub const SEND_AHEAD_US: u64 = 1_000_000;
+
+/// The frames `mocap send show.mcb --cues` writes for the firmware's show
+/// mode (SPEC.md §8.2), each with the time it is due: `00` and `Hello` and
+/// the first command at once (its arrival starts the show clock), every
+/// other command [`SEND_AHEAD_US`] before its time, then `End` at the
+/// script's `end`.
+pub fn command_frames(script: &Script) -> Result<Vec<(u64, Vec<u8>)>, PlayError> {
+    use mocap_servo::stream::{self, Message, ShowOp};
+    let ms = |us: u64| u32::try_from(us / 1000).unwrap_or(u32::MAX);
+    let frame = |m: &Message<'_>| -> Result<Vec<u8>, PlayError> {
+        let mut buf = [0u8; stream::MAX_FRAME_LEN];
+        let len = stream::encode_frame(m, &mut buf).map_err(PlayError::Frame)?;
+        Ok(buf[..len].to_vec())
+    };
+    let mut hello = vec![stream::DELIMITER];
+    hello.extend(frame(&Message::Hello {
+        version: stream::PROTOCOL_VERSION,
+    })?);
+    let mut out = vec![(0, hello)];
+    for (i, (at, cmd)) in script.commands.iter().enumerate() {
+        let due = if i == 0 {
+            0
+        } else {
+            at.saturating_sub(SEND_AHEAD_US)
+        };
+        out.push((due, frame(&stream::show_message(ms(*at), *cmd))?));
+    }
+    if let Some(end) = script.end_us {
+        let m = Message::Show {
+            at_ms: ms(end),
+            op: ShowOp::End as u8,
+            arg: 0,
+            ms: 0,
+        };
+        out.push((end.saturating_sub(SEND_AHEAD_US), frame(&m)?));
+    }
+    // Due times never go back (a sender writes in order).
+    let mut latest = 0;
+    for (due, _) in &mut out {
+        latest = latest.max(*due);
+        *due = latest;
+    }
+    Ok(out)
+}
