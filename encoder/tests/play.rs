@@ -448,7 +448,7 @@ fn send_starts_with_a_flushing_delimiter() {
             first.get_or_insert(format!("{m:?}"));
         }
     }
-    assert_eq!(first.as_deref(), Some("Hello { version: 2 }"));
+    assert_eq!(first.as_deref(), Some("Hello { version: 3 }"));
 }
 
 #[test]
@@ -471,7 +471,7 @@ fn send_poses_sends_every_tick_of_the_servo_clip_then_stop() {
     }
     assert_eq!(
         messages.first().map(String::as_str),
-        Some("Hello { version: 2 }")
+        Some("Hello { version: 3 }")
     );
     assert_eq!(messages.last().map(String::as_str), Some("Stop"));
     for (i, (m, pulses)) in messages[1..messages.len() - 1]

@@ -107,6 +107,15 @@ impl Example {
                 Message::pose(self.num("seq"), &pulses).expect("a pose that fits")
             }
             "Stop" => Message::Stop,
+            "Show" => Message::Show {
+                at_ms: self.num("at_ms"),
+                op: self.num("op"),
+                arg: self.num("arg"),
+                ms: self.num("ms"),
+            },
+            "Timecode" => Message::Timecode {
+                show_ms: self.num("show_ms"),
+            },
             "Status" => Message::Status {
                 received: self.num("received"),
                 dropped: self.num("dropped"),
@@ -158,7 +167,16 @@ fn spec_has_every_message() {
         .iter()
         .map(|e| e.field("message").to_string())
         .collect();
-    for m in ["Hello", "ClipChunk", "Play", "Pose", "Stop", "Status"] {
+    for m in [
+        "Hello",
+        "ClipChunk",
+        "Play",
+        "Pose",
+        "Stop",
+        "Status",
+        "Show",
+        "Timecode",
+    ] {
         assert!(
             found.iter().any(|f| f == m),
             "SPEC.md §8 has no {m} frame example"
@@ -209,11 +227,20 @@ fn frames_have_the_layout_of_the_prose() {
             "{}: CRC of the message",
             ex.name
         );
-        // postcard: the tag is the variant's varint, one byte for six variants.
-        let tag = ["Hello", "ClipChunk", "Play", "Pose", "Stop", "Status"]
-            .iter()
-            .position(|m| *m == ex.field("message"))
-            .expect("a known message");
+        // postcard: the tag is the variant's varint, one byte for eight variants.
+        let tag = [
+            "Hello",
+            "ClipChunk",
+            "Play",
+            "Pose",
+            "Stop",
+            "Status",
+            "Show",
+            "Timecode",
+        ]
+        .iter()
+        .position(|m| *m == ex.field("message"))
+        .expect("a known message");
         assert_eq!(usize::from(message[0]), tag, "{}: tag", ex.name);
     }
 }
