@@ -165,7 +165,8 @@ panic_call_sites() {
 }
 
 # The firmware's build modes the panic check covers: each selects other code (build.rs consts).
-PANIC_MODES=("" "--sample-us 20000" "--servo maestro" "--servo ssc32" "--servo pwm" "--servo pca9685" "--stream")
+PANIC_MODES=("" "--sample-us 20000" "--servo maestro" "--servo ssc32" "--servo pwm" "--servo pca9685" "--stream"
+    "--clip firmware-example/clips/demo_show.mcb --servo maestro")
 
 # panic_free BOARD: every mode's ELF of BOARD against the allowlist.
 panic_free() {

@@ -8,6 +8,8 @@
 #       firmware prints Player::sample_at at t = 0, P, 2P, … up to and including the first t
 #       past the clip's duration instead of every frame.
 #   scripts/firmware.sh run --board B [--clip PATH.mcb] [--sample-us P] [--servo OUTPUT] [--icount] [--timeout SECONDS]
+#       A show (mocap show build) as --clip runs the show mode: commands over the UART (--input
+#       FILE from `mocap send show.mcb --cues cues.txt --output FILE --fast`), SPEC.md §8.2.
 #       --servo maestro|ssc32|pwm|pca9685 plays a servo clip (mocap encode --rig) at its rig's
 #       rate through that output and prints one line per tick: Maestro bytes as hex, SSC-32
 #       text, the 16 duties of the (recorded) PWM channels, the (recorded) PCA9685 I²C writes

@@ -16,7 +16,7 @@ use heapless::Deque;
 use mocap_decoder::show::clock::DEFAULT_SLEW_PPM;
 use mocap_decoder::{Command, Output, Show, ShowClock, ShowRunner, State};
 use mocap_servo::output::ServoOutput;
-use mocap_servo::stream::show_command;
+use mocap_servo::stream::{show_request, Message, ShowRequest};
 
 use crate::board::Rx;
 use crate::servo::{hex, Driver, Fault, Mode, TickStats, MAX_SERVOS, PLAYER_WORDS};
@@ -30,8 +30,8 @@ pub const QUEUE: usize = 32;
 /// Output events of one tick kept for printing.
 const EVENTS: usize = 8;
 
-/// A command or `End` (`None`) at a show time, µs.
-type Pending = (u64, Option<Command>);
+/// A request at a show time, µs.
+type Pending = (u64, ShowRequest);
 
 /// The show in flash.
 pub struct ShowMode {
@@ -52,8 +52,8 @@ fn take(
     while !queue.is_full() {
         let Some(event) = link.poll() else { return };
         match event {
-            Event::Show { at_ms, op, arg, ms } => match show_command(op, arg, ms) {
-                Some(cmd) if queue.push_back((u64::from(at_ms) * 1000, cmd)).is_ok() => {}
+            Event::Show { at_ms, op, arg, ms } => match show_request(op, arg, ms) {
+                Some(r) if queue.push_back((u64::from(at_ms) * 1000, r)).is_ok() => {}
                 _ => *rejected += 1,
             },
             Event::Timecode { show_ms } => clock.timecode(local_us, u64::from(show_ms) * 1000),
@@ -62,8 +62,10 @@ fn take(
             // A host that stops (`mocap send`, Ctrl-C): stop now and end, at rest.
             Event::Stop => {
                 let now = clock.now(local_us);
-                if queue.push_back((now, Some(Command::Stop))).is_err()
-                    || queue.push_back((now, None)).is_err()
+                if queue
+                    .push_back((now, ShowRequest::Run(Command::Stop)))
+                    .is_err()
+                    || queue.push_back((now, ShowRequest::End)).is_err()
                 {
                     *rejected += 1;
                 }
@@ -99,8 +101,8 @@ impl Mode for ShowMode {
         // The show starts with the first command.
         while queue.is_empty() {
             match link.wait() {
-                Some(Event::Show { at_ms, op, arg, ms }) => match show_command(op, arg, ms) {
-                    Some(cmd) if queue.push_back((u64::from(at_ms) * 1000, cmd)).is_ok() => {}
+                Some(Event::Show { at_ms, op, arg, ms }) => match show_request(op, arg, ms) {
+                    Some(r) if queue.push_back((u64::from(at_ms) * 1000, r)).is_ok() => {}
                     _ => rejected += 1,
                 },
                 Some(Event::Hello) => {}
@@ -133,15 +135,17 @@ impl Mode for ShowMode {
                     dropped_events += 1;
                 }
             };
-            while let Some(&(at, cmd)) = queue.front().filter(|(at, _)| *at <= t) {
+            let mut status = None;
+            while let Some(&(at, request)) = queue.front().filter(|(at, _)| *at <= t) {
                 queue.pop_front();
-                match cmd {
-                    Some(c) => match runner.command(c, at.max(last_t), &mut emit) {
+                match request {
+                    ShowRequest::Run(c) => match runner.command(c, at.max(last_t), &mut emit) {
                         Ok(()) => {}
                         // A clip or list the show does not have: nothing changes.
                         Err(_) => rejected += 1,
                     },
-                    None => end = Some(at),
+                    ShowRequest::End => end = Some(at),
+                    ShowRequest::Status => status = Some(at.max(last_t)),
                 }
             }
             let now = runner
@@ -170,6 +174,16 @@ impl Mode for ShowMode {
                 print_event(*at, o, text);
             }
             events.clear();
+            if let Some(at) = status {
+                let (state, clip) = (now.state, now.clip);
+                let message = Message::ShowStatus {
+                    show_ms: u32::try_from(at / 1000).unwrap_or(u32::MAX),
+                    clip: clip.unwrap_or(u16::MAX),
+                    state: state_code(state),
+                    list: runner.running().map_or(u16::MAX, |(l, _)| l),
+                };
+                crate::stream::send(text, &message)?;
+            }
             last_t = t;
             i += 1;
             if end.is_none() && queue.is_empty() && runner.is_done() {
@@ -201,6 +215,18 @@ impl Mode for ShowMode {
             .kv("stack_bytes_used", crate::stack::used_bytes() as u64)
             .nl();
         Ok(())
+    }
+}
+
+/// `ShowStatus.state` (SPEC.md §8.2).
+fn state_code(s: State) -> u8 {
+    match s {
+        State::Idle => 0,
+        State::Playing => 1,
+        State::Blending => 2,
+        State::Held => 3,
+        State::Stopped => 4,
+        State::Ended => 5,
     }
 }
 

@@ -452,7 +452,7 @@ impl Session {
 }
 
 /// Writes one frame back to the host (printed as a hex line here, see the module doc).
-fn send(text: &mut Out, message: &Message<'_>) -> Result<(), Failure> {
+pub(crate) fn send(text: &mut Out, message: &Message<'_>) -> Result<(), Failure> {
     let mut frame = [0u8; MAX_FRAME_LEN];
     let len = encode_frame(message, &mut frame).map_err(|e| Failure::ServoCrate("frame", e))?;
     text.str("f");

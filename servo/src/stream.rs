@@ -33,6 +33,7 @@
 //! | 5   | `Status`    | MCU → host | `received: u32`, `dropped: u32`, `last_seq: u16`, `state: u8`, `chunks: u32` |
 //! | 6   | `Show`      | host → MCU | `at_ms: u32`, `op: u8`, `arg: u16`, `ms: u32`: a show command ([`ShowOp`]) |
 //! | 7   | `Timecode`  | host → MCU | `show_ms: u32`: the show clock's time now |
+//! | 8   | `ShowStatus`| MCU → host | `show_ms: u32`, `clip: u16`, `state: u8`, `list: u16`: the reply to `Show` op `Status` |
 //!
 //! A message is at most [`MAX_MESSAGE_LEN`] bytes (a `Pose` of 32 pulses of
 //! 3-byte varints) and a frame at most [`MAX_FRAME_LEN`] bytes with its
@@ -136,6 +137,17 @@ pub enum Message<'a> {
         /// Show time, ms.
         show_ms: u32,
     },
+    /// The show mode's report, the reply to a `Show` of op [`ShowOp::Status`].
+    ShowStatus {
+        /// Show time of the report, ms.
+        show_ms: u32,
+        /// The clip that plays (the incoming one of a transition), `u16::MAX` for none.
+        clip: u16,
+        /// The show player's state: 0 idle, 1 playing, 2 blending, 3 held, 4 stopped, 5 ended.
+        state: u8,
+        /// The running cue list, `u16::MAX` for none.
+        list: u16,
+    },
 }
 
 /// `Show.op` (SPEC.md §8.2): the show commands of `mocap_decoder::Command`,
@@ -163,6 +175,19 @@ pub enum ShowOp {
     Stop = 8,
     /// The show ends: the servos return to rest.
     End = 9,
+    /// Report: the MCU answers with a `ShowStatus`.
+    Status = 10,
+}
+
+/// What a `Show` message asks (SPEC.md §8.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShowRequest {
+    /// A command of the show runner.
+    Run(mocap_decoder::Command),
+    /// The show ends.
+    End,
+    /// A `ShowStatus` in reply.
+    Status,
 }
 
 /// A show command as a `Show` message's fields (`End` is not a command).
@@ -187,12 +212,11 @@ pub fn show_message(at_ms: u32, command: mocap_decoder::Command) -> Message<'sta
     }
 }
 
-/// What a `Show` message asks: `Some(Some(command))`, `Some(None)` for
-/// `End`, `None` for an op this version does not know (or an input past
-/// `u8`, a loop flag other than 0 and 1).
-pub fn show_command(op: u8, arg: u16, ms: u32) -> Option<Option<mocap_decoder::Command>> {
+/// What a `Show` message asks; `None` for an op this version does not
+/// know (or an input past `u8`, a loop flag other than 0 and 1).
+pub fn show_request(op: u8, arg: u16, ms: u32) -> Option<ShowRequest> {
     use mocap_decoder::Command as C;
-    Some(Some(match op {
+    Some(ShowRequest::Run(match op {
         0 => C::List(arg),
         1 => C::Trigger(u8::try_from(arg).ok()?),
         2 => C::Play(arg),
@@ -206,7 +230,8 @@ pub fn show_command(op: u8, arg: u16, ms: u32) -> Option<Option<mocap_decoder::C
         6 => C::Hold,
         7 => C::Resume,
         8 => C::Stop,
-        9 => return Some(None),
+        9 => return Some(ShowRequest::End),
+        10 => return Some(ShowRequest::Status),
         _ => return None,
     }))
 }

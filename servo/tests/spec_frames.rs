@@ -116,6 +116,12 @@ impl Example {
             "Timecode" => Message::Timecode {
                 show_ms: self.num("show_ms"),
             },
+            "ShowStatus" => Message::ShowStatus {
+                show_ms: self.num("show_ms"),
+                clip: self.num("clip"),
+                state: self.num("state"),
+                list: self.num("list"),
+            },
             "Status" => Message::Status {
                 received: self.num("received"),
                 dropped: self.num("dropped"),
@@ -227,7 +233,7 @@ fn frames_have_the_layout_of_the_prose() {
             "{}: CRC of the message",
             ex.name
         );
-        // postcard: the tag is the variant's varint, one byte for eight variants.
+        // postcard: the tag is the variant's varint, one byte for nine variants.
         let tag = [
             "Hello",
             "ClipChunk",
@@ -237,6 +243,7 @@ fn frames_have_the_layout_of_the_prose() {
             "Status",
             "Show",
             "Timecode",
+            "ShowStatus",
         ]
         .iter()
         .position(|m| *m == ex.field("message"))

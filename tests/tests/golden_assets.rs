@@ -37,3 +37,17 @@ fn firmware_default_clip_is_current() {
         "firmware-example/clips/demo.mcb is stale: regenerate it (README.md, Shipped files)"
     );
 }
+
+#[test]
+fn firmware_demo_show_is_current() {
+    use mocap_encoder::show::{self, file::ShowSpec};
+    let shipped =
+        std::fs::read(workspace_root().join("firmware-example/clips/demo_show.mcb")).unwrap();
+    let spec = ShowSpec::read_file(&workspace_root().join("assets/shows/demo.toml")).unwrap();
+    let built = show::build(&spec).unwrap().bytes;
+    mocap_decoder::Show::parse(&shipped).unwrap();
+    assert!(
+        built == shipped,
+        "firmware-example/clips/demo_show.mcb is stale: regenerate it (README.md, Shipped files)"
+    );
+}

@@ -349,3 +349,68 @@ fn golden_corpus_digests() {
         diff(&expected, &actual)
     );
 }
+
+/// The shipped demo show (`mocap show build assets/shows/demo.toml`) pins the show format
+/// (SPEC.md §9) and its builder: the committed `tests/golden/demo_show.mcb` is what the
+/// builder writes today, and its clips decode to the committed output (each clip's frames,
+/// then the show player's pose at every 20 ms through a scripted sequence of plays, fades,
+/// a queue and a stop).
+#[test]
+fn the_demo_show_is_golden() {
+    use mocap_decoder::Show;
+    use mocap_encoder::show::{self, file::ShowSpec, HostShowPlayer};
+    let spec = ShowSpec::read_file(&workspace_root().join("assets/shows/demo.toml")).unwrap();
+    let built = show::build(&spec).unwrap().bytes;
+    let (mcb, out) = (
+        golden_dir().join("demo_show.mcb"),
+        golden_dir().join("demo_show.out"),
+    );
+    if bless() {
+        std::fs::write(&mcb, &built).unwrap();
+    }
+    let committed =
+        std::fs::read(&mcb).expect("tests/golden/demo_show.mcb (MOCAP_BLESS=1 writes it)");
+    assert!(
+        built == committed,
+        "the show builder no longer writes tests/golden/demo_show.mcb"
+    );
+    let s = Show::parse(&committed).unwrap();
+    let mut text = String::new();
+    for i in 0..s.clip_count() {
+        let e = s.entry(i).unwrap();
+        let clip = s.clip(i).unwrap();
+        let mut p = Player::<128>::new(&clip).unwrap();
+        let mut v = vec![0; clip.header().channel_count()];
+        let _ = writeln!(
+            text,
+            "clip {i} {} frames={} loop={:?}",
+            e.name, e.frames, e.looping
+        );
+        while p.next_frame(&mut v).unwrap().is_some() {
+            let _ = writeln!(text, "{v:?}");
+        }
+    }
+    let mut p = Box::new(HostShowPlayer::new(s).unwrap());
+    let mut v = vec![0; s.header().channel_count()];
+    for k in 0..400u64 {
+        let t = k * 20_000;
+        match k {
+            0 => p.play(0, t).unwrap(),
+            40 => p.crossfade_to(1, 400_000, t).unwrap(),
+            50 => p.crossfade_to(2, 300_000, t).unwrap(),
+            120 => p.queue(3, t).unwrap(),
+            300 => p.stop(t).unwrap(),
+            _ => {}
+        }
+        let now = p.sample(t, &mut v).unwrap();
+        let _ = writeln!(text, "t={t} {:?} {v:?}", now.state);
+    }
+    if bless() {
+        std::fs::write(&out, &text).unwrap();
+    }
+    let want = std::fs::read_to_string(&out).expect("tests/golden/demo_show.out");
+    assert!(
+        text == want,
+        "the demo show decodes differently from tests/golden/demo_show.out"
+    );
+}

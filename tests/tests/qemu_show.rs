@@ -15,6 +15,7 @@ use mocap_decoder::Show;
 use mocap_encoder::play::{Policy, Protocol};
 use mocap_encoder::show::play::{command_frames, show_stream, Script};
 use mocap_encoder::show::{self, file::ShowSpec};
+use mocap_servo::stream::{decode_frame, Message};
 use mocap_tests::snapshot::check_snapshot;
 use mocap_tests::{boards, data_lines, demo_figure, qemu_available, run_firmware, workspace_root};
 
@@ -23,6 +24,7 @@ const INTERRUPTS: &str = "\
 0.6  fade look 400
 0.8  fade talk 300    # into a fade: from the frozen pose
 0.9  fade idle 0      # a cut
+1.0  status           # the MCU answers: 1 000 ms, clip 3 (idle), playing, no cue list
 1.5  queue greet
 2.2  fade look 500
 2.4  stop             # mid-blend
@@ -62,7 +64,7 @@ fn host(bytes: &[u8], script: &Script) -> (String, Vec<String>) {
     (lines, played.events.into_iter().map(|(_, l)| l).collect())
 }
 
-fn run(name: &str, text: &str, show: &Path, bytes: &[u8]) {
+fn run(name: &str, text: &str, show: &Path, bytes: &[u8], want_status: Vec<Message<'static>>) {
     let parsed = Show::parse(bytes).unwrap();
     let script = Script::parse(text, name, &parsed).unwrap();
     let (want, want_events) = host(bytes, &script);
@@ -85,11 +87,27 @@ fn run(name: &str, text: &str, show: &Path, bytes: &[u8]) {
                 "--icount",
             ],
         );
-        assert_eq!(
-            data_lines(&uart),
-            want,
-            "{board} {name}: the MCU's servo commands are the host's"
+        let data = data_lines(&uart);
+        let (frames, commands): (Vec<&str>, Vec<&str>) =
+            data.lines().partition(|l| l.starts_with("f "));
+        let commands: String = commands.iter().flat_map(|l| [*l, "\n"]).collect();
+        // Not assert_eq: the two texts are long.
+        assert!(
+            commands == want,
+            "{board} {name}: the MCU's servo commands differ from the host's"
         );
+        let replies: Vec<String> = frames
+            .iter()
+            .map(|l| {
+                let mut bytes: Vec<u8> = l[2..]
+                    .split(' ')
+                    .map(|b| u8::from_str_radix(b, 16).unwrap())
+                    .collect();
+                format!("{:?}", decode_frame(&mut bytes).unwrap())
+            })
+            .collect();
+        let want_replies: Vec<String> = want_status.iter().map(|m| format!("{m:?}")).collect();
+        assert_eq!(replies, want_replies, "{board} {name}: ShowStatus replies");
         let events: Vec<String> = uart
             .lines()
             .filter(|l| l.starts_with("# event"))
@@ -121,6 +139,12 @@ fn the_demo_show_plays_on_every_core_as_on_the_host() {
     let (show, bytes) = demo_show();
     let cues =
         std::fs::read_to_string(workspace_root().join("assets/shows/demo_cues.txt")).unwrap();
-    run("demo", &cues, &show, &bytes);
-    run("interrupts", INTERRUPTS, &show, &bytes);
+    run("demo", &cues, &show, &bytes, vec![]);
+    let status = Message::ShowStatus {
+        show_ms: 1000,
+        clip: 3,
+        state: 1,
+        list: u16::MAX,
+    };
+    run("interrupts", INTERRUPTS, &show, &bytes, vec![status]);
 }

@@ -129,7 +129,7 @@ fn play_show(
                 None => Command::Play(0),
             };
             Script {
-                commands: vec![(0, first)],
+                commands: vec![(0, mocap_encoder::show::play::ShowRequest::Run(first))],
                 end_us: None,
             }
         }

@@ -395,8 +395,9 @@ impl<'a, const N: usize, const C: usize> ShowPlayer<'a, N, C> {
     fn freeze(&mut self, t: u64) -> Result<(), Error> {
         let mut now = [0i32; C];
         let mut before = [0i32; C];
-        self.pose_at(t, &mut now)?;
+        // Earlier time first: frame codecs then decode forward from the frames they hold.
         self.pose_at(t.saturating_sub(VELOCITY_STEP_US), &mut before)?;
+        self.pose_at(t, &mut now)?;
         for (i, d) in self.snap_d.iter_mut().enumerate() {
             let (a, b) = (at(&before, i), at(&now, i));
             *d = diff(b, a, flag(&self.wrap, i));

@@ -11,11 +11,13 @@
 //! 5      play talk        # play / fade <clip> <ms> / queue <clip>
 //! 6      fade wave 400
 //! 8      loop on          # loop on|off, hold, resume, stop
+//! 9      status           # the firmware answers with a ShowStatus frame
 //! 20     end              # stop the show here (default: when it is done)
 //! ```
 
 use mocap_decoder::show::runner::{Command, Output};
 use mocap_decoder::{tick_us, Show, ShowRunner};
+pub use mocap_servo::stream::ShowRequest;
 
 use super::{MAX_CHANNELS, PLAYER_WORDS};
 use crate::located::{LocatedError, Position};
@@ -29,8 +31,9 @@ pub type HostShowRunner<'a> = ShowRunner<'a, PLAYER_WORDS, MAX_CHANNELS>;
 /// A command script: commands at show times, and where to end.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Script {
-    /// Commands and their show times, µs, in time order.
-    pub commands: Vec<(u64, Command)>,
+    /// Commands (`ShowRequest::Run`, `ShowRequest::Status`) and their show
+    /// times, µs, in time order.
+    pub commands: Vec<(u64, ShowRequest)>,
     /// `end` at this time, µs.
     pub end_us: Option<u64>,
 }
@@ -139,12 +142,17 @@ impl Script {
                     arity(2)?;
                     Command::Stop
                 }
+                Some("status") => {
+                    arity(2)?;
+                    script.commands.push((t_us, ShowRequest::Status));
+                    continue;
+                }
                 Some(w) => return Err(at(format!(
-                    "unknown command `{w}` (list, trigger, play, fade, queue, loop, hold, resume, stop, end)"
+                    "unknown command `{w}` (list, trigger, play, fade, queue, loop, hold, resume, stop, status, end)"
                 ))),
                 None => return Err(at("a time and a command".into())),
             };
-            script.commands.push((t_us, cmd));
+            script.commands.push((t_us, ShowRequest::Run(cmd)));
         }
         Ok(script)
     }
@@ -211,8 +219,11 @@ pub fn show_stream(
             break;
         }
         let mut emit = |at: u64, o: Output<'_>| events.push((at, event_text(at, &o)));
-        while let Some((at, cmd)) = script.commands.get(next).filter(|(at, _)| *at <= t) {
-            runner.command(*cmd, *at, &mut emit)?;
+        while let Some((at, request)) = script.commands.get(next).filter(|(at, _)| *at <= t) {
+            // A status request moves nothing (the firmware answers it).
+            if let ShowRequest::Run(cmd) = request {
+                runner.command(*cmd, *at, &mut emit)?;
+            }
             next += 1;
         }
         runner.tick(t, &mut pose, &mut emit)?;
@@ -270,13 +281,26 @@ pub fn command_frames(script: &Script) -> Result<Vec<(u64, Vec<u8>)>, PlayError>
         version: stream::PROTOCOL_VERSION,
     })?);
     let mut out = vec![(0, hello)];
-    for (i, (at, cmd)) in script.commands.iter().enumerate() {
+    for (i, (at, request)) in script.commands.iter().enumerate() {
         let due = if i == 0 {
             0
         } else {
             at.saturating_sub(SEND_AHEAD_US)
         };
-        out.push((due, frame(&stream::show_message(ms(*at), *cmd))?));
+        let m = match request {
+            ShowRequest::Run(cmd) => stream::show_message(ms(*at), *cmd),
+            ShowRequest::Status | ShowRequest::End => Message::Show {
+                at_ms: ms(*at),
+                op: if *request == ShowRequest::Status {
+                    ShowOp::Status as u8
+                } else {
+                    ShowOp::End as u8
+                },
+                arg: 0,
+                ms: 0,
+            },
+        };
+        out.push((due, frame(&m)?));
     }
     if let Some(end) = script.end_us {
         let m = Message::Show {
