@@ -167,22 +167,26 @@ fn crc32(bytes: &[u8]) -> u32 {
     !crc
 }
 
+/// Every message, in the order of its tag (SPEC.md §8).
+const MESSAGES: [&str; 9] = [
+    "Hello",
+    "ClipChunk",
+    "Play",
+    "Pose",
+    "Stop",
+    "Status",
+    "Show",
+    "Timecode",
+    "ShowStatus",
+];
+
 #[test]
 fn spec_has_every_message() {
     let found: Vec<String> = examples()
         .iter()
         .map(|e| e.field("message").to_string())
         .collect();
-    for m in [
-        "Hello",
-        "ClipChunk",
-        "Play",
-        "Pose",
-        "Stop",
-        "Status",
-        "Show",
-        "Timecode",
-    ] {
+    for m in MESSAGES {
         assert!(
             found.iter().any(|f| f == m),
             "SPEC.md §8 has no {m} frame example"
@@ -234,20 +238,10 @@ fn frames_have_the_layout_of_the_prose() {
             ex.name
         );
         // postcard: the tag is the variant's varint, one byte for nine variants.
-        let tag = [
-            "Hello",
-            "ClipChunk",
-            "Play",
-            "Pose",
-            "Stop",
-            "Status",
-            "Show",
-            "Timecode",
-            "ShowStatus",
-        ]
-        .iter()
-        .position(|m| *m == ex.field("message"))
-        .expect("a known message");
+        let tag = MESSAGES
+            .iter()
+            .position(|m| *m == ex.field("message"))
+            .expect("a known message");
         assert_eq!(usize::from(message[0]), tag, "{}: tag", ex.name);
     }
 }

@@ -20,10 +20,11 @@ pub enum Codec {
     Predictive(Predictive),
 }
 
-/// §2: preamble, section table, CRC; §3.1 / §3.4: the header's counts.
-pub fn parse(bytes: &[u8]) -> Clip {
+/// §2 (§9.1 for `version` 2): preamble, section table, CRC; the sections
+/// in table order.
+fn sections(bytes: &[u8], version: u8) -> Vec<(u8, &[u8])> {
     assert_eq!(&bytes[..4], b"MOCB", "magic");
-    assert_eq!(bytes[4..6], [1, 0], "version 1, flags 0");
+    assert_eq!(bytes[4..6], [version, 0], "version {version}, flags 0");
     let n = usize::from(u16::from_le_bytes([bytes[6], bytes[7]]));
     let (body, crc) = bytes.split_at(bytes.len() - 4);
     assert_eq!(
@@ -32,16 +33,24 @@ pub fn parse(bytes: &[u8]) -> Clip {
         "CRC"
     );
     let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
+    (0..n)
+        .map(|e| {
+            let entry = 8 + 12 * e;
+            assert_eq!(bytes[entry + 1..entry + 4], [0, 0, 0], "reserved");
+            let (offset, len) = (u32_at(entry + 4), u32_at(entry + 8));
+            (bytes[entry], &bytes[offset..offset + len])
+        })
+        .collect()
+}
+
+/// §2: preamble, section table, CRC; §3.1 / §3.4: the header's counts.
+pub fn parse(bytes: &[u8]) -> Clip {
     let mut header = None;
     let mut codec = None;
-    for e in 0..n {
-        let entry = 8 + 12 * e;
-        assert_eq!(bytes[entry + 1..entry + 4], [0, 0, 0], "reserved");
-        let (offset, len) = (u32_at(entry + 4), u32_at(entry + 8));
-        let section = &bytes[offset..offset + len];
-        match bytes[entry] {
-            id @ (0x01 | 0x02) => header = Some((id, section)),
-            id @ (0x10..=0x12) => codec = Some((id, section)),
+    for (id, section) in sections(bytes, 1) {
+        match id {
+            0x01 | 0x02 => header = Some((id, section)),
+            0x10..=0x12 => codec = Some((id, section)),
             id => panic!("the reference reads no section {id:#04x}"),
         }
     }
@@ -859,24 +868,7 @@ fn header_counts(header_id: u8, header: &[u8]) -> (u32, u32, usize) {
 /// §9: a show's clips, by name, each a [`Clip`] of the shared header's
 /// channels with its own frame count and codec section (§9.2).
 pub fn parse_show(bytes: &[u8]) -> Vec<(String, Clip)> {
-    assert_eq!(&bytes[..4], b"MOCB", "magic");
-    assert_eq!(bytes[4..6], [2, 0], "version 2, flags 0");
-    let n = usize::from(u16::from_le_bytes([bytes[6], bytes[7]]));
-    let (body, crc) = bytes.split_at(bytes.len() - 4);
-    assert_eq!(
-        u32::from_le_bytes(crc.try_into().unwrap()),
-        crc32(body),
-        "CRC"
-    );
-    let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
-    let sections: Vec<(u8, &[u8])> = (0..n)
-        .map(|e| {
-            let entry = 8 + 12 * e;
-            assert_eq!(bytes[entry + 1..entry + 4], [0, 0, 0], "reserved");
-            let (offset, len) = (u32_at(entry + 4), u32_at(entry + 8));
-            (bytes[entry], &bytes[offset..offset + len])
-        })
-        .collect();
+    let sections = sections(bytes, 2);
     let (header_id, header) = *sections
         .iter()
         .find(|(id, _)| matches!(id, 0x01 | 0x02))
