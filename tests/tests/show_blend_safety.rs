@@ -389,9 +389,9 @@ fn build(toml: &str) -> (Vec<u8>, Figure) {
 
 #[test]
 fn cmu_servo_show_blends_stay_inside_the_figure() {
-    let (Some(_), Some(_)) = (corpus_files("cmu"), corpus_files("cmu-long")) else {
+    if corpus_files("cmu").is_none() || corpus_files("cmu-long").is_none() {
         return;
-    };
+    }
     // The show file reads `${MOCAP_CORPUS:-…}` relative to its own folder;
     // the corpus helper's folder is absolute (a relative MOCAP_CORPUS is
     // taken from the workspace root there).
