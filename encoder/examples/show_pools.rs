@@ -103,6 +103,13 @@ fn section(file: &[u8], i: usize) -> (u8, &[u8]) {
     (file[e], &file[off..off + len])
 }
 
+/// A distinct table of the show: the clips that hold it.
+struct Distinct {
+    clips: HashSet<usize>,
+    entries: usize,
+    constant: bool,
+}
+
 /// Counts of a set of tables.
 #[derive(Default)]
 struct Count {
@@ -153,8 +160,8 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|");
     let (mut section_bytes, mut pool_entries) = (0, 0);
     let (mut all, mut within) = (Count::default(), Count::default());
-    // Distinct tables of the whole show: content → clips holding it.
-    let mut show_tables: HashMap<&[i16], (HashSet<usize>, bool)> = HashMap::new();
+    // Distinct tables of the whole show, by content.
+    let mut show_tables: HashMap<&[i16], Distinct> = HashMap::new();
     for (k, (name, p)) in pools.iter().enumerate() {
         let mut seen: HashSet<&[i16]> = HashSet::new();
         let (mut count, mut dup) = (Count::default(), Count::default());
@@ -163,10 +170,12 @@ fn main() {
             if !seen.insert(&t.entries) {
                 dup.add(t);
             }
-            let e = show_tables
-                .entry(&t.entries)
-                .or_insert((HashSet::new(), t.constant));
-            e.0.insert(k);
+            let d = show_tables.entry(&t.entries).or_insert(Distinct {
+                clips: HashSet::new(),
+                entries: t.entries.len(),
+                constant: t.constant,
+            });
+            d.clips.insert(k);
         }
         println!(
             "| {name} | {} | {} | {} | {} | {} | {} | {} |",
@@ -211,15 +220,12 @@ fn main() {
         2 * within.entries,
         pct(2 * within.entries, pool_bytes)
     );
-    let distinct_entries: usize = show_tables.keys().map(|t| t.len()).sum();
-    let in_many: Vec<(&&[i16], &(HashSet<usize>, bool))> = show_tables
-        .iter()
-        .filter(|(_, (clips, _))| clips.len() > 1)
-        .collect();
+    let distinct_entries: usize = show_tables.values().map(|d| d.entries).sum();
+    let in_many: Vec<&Distinct> = show_tables.values().filter(|d| d.clips.len() > 1).collect();
     let many_tables = in_many.len();
-    let many_constants = in_many.iter().filter(|(_, (_, c))| *c).count();
-    let many_entries: usize = in_many.iter().map(|(t, _)| t.len()).sum();
-    let copies: usize = in_many.iter().map(|(_, (c, _))| c.len()).sum();
+    let many_constants = in_many.iter().filter(|d| d.constant).count();
+    let many_entries: usize = in_many.iter().map(|d| d.entries).sum();
+    let copies: usize = in_many.iter().map(|d| d.clips.len()).sum();
     println!(
         "identical across clips: {many_tables} distinct tables ({many_constants} constants, {many_entries} entries) occur in 2 or more clips, {copies} clip copies of them"
     );
