@@ -4,7 +4,11 @@
 #     20 mm and 50 mm with ARMS ≤ 10 mm (ratios, errors, encode times), and pca-spline encode
 #     time against clip length;
 #  2. decode cost in QEMU with -icount shift=0 on Cortex-M0/M3/M4F for one CMU clip;
-#  3. firmware and decoder sizes, decoder state size.
+#  3. firmware and decoder sizes, decoder state size;
+#  4. shows (BENCHMARKS.md §6): the show files' bytes against their clips as single files
+#     (`mocap show build`), the index table pools of the iclone show and what sharing them could
+#     save (encoder/examples/show_pools.rs), and the blend safety figures of every transition of
+#     the CMU servo and demo shows (tests/tests/show_blend_safety.rs).
 #   bash scripts/bench.sh [CLIP.bvh]   (default: $MOCAP_CORPUS/cmu/35_01.bvh)
 #   Failing steps print why (their output is in target/bench/steps.log).
 set -euo pipefail
@@ -14,7 +18,9 @@ cd "$MOCAP_REPO_ROOT"
 corpus="${MOCAP_CORPUS:-../shared/data}"
 mocap_toolchain_setup >&2
 cargo build --release -q -p mocap-cli
-mocap=target/release/mocap
+cargo build --release -q -p mocap-encoder --example show_pools
+mocap="${CARGO_TARGET_DIR:-target}/release/mocap"
+show_pools="${CARGO_TARGET_DIR:-target}/release/examples/show_pools"
 out=target/bench
 mkdir -p "$out"
 log="$out/steps.log"
@@ -112,4 +118,28 @@ for board in $(mocap_boards); do
     bash scripts/firmware.sh size --board "$board" --clip "$out/clip.mcb" 2>>"$log" | tr '\n' ' '
     echo
 done
+echo '```'
+echo
+
+# The show files read ${MOCAP_CORPUS:-…} from their own folder: give them the corpus absolute.
+corpus_abs=$(cd "$corpus" && pwd)
+echo "## Shows (mocap show build assets/shows/S.toml -o S.mcb)"
+echo
+echo '```text'
+for s in cmu_servo iclone_motion iclone_motion_boneroot; do
+    MOCAP_CORPUS="$corpus_abs" "$mocap" show build "assets/shows/$s.toml" -o "$out/$s.mcb" 2>>"$log"
+done
+echo '```'
+echo
+echo "## index table pools of the iclone shows (cargo run --release -p mocap-encoder --example show_pools -- S.mcb)"
+echo
+for s in iclone_motion iclone_motion_boneroot; do
+    "$show_pools" "$out/$s.mcb"
+    echo
+done
+echo "## Blend safety (cargo test --release -p mocap-tests --test show_blend_safety -- --nocapture)"
+echo
+echo '```text'
+MOCAP_CORPUS="$corpus_abs" mocap_logged "$log" cargo test --release -q -p mocap-tests --test show_blend_safety -- --nocapture
+grep -oE '(cmu_servo|demo): .*' "$log" | tail -n 8
 echo '```'
