@@ -19,6 +19,7 @@ use mocap_encoder::play::{Figure, Protocol, MAX_SERVOS};
 use mocap_encoder::rig::Rig;
 use mocap_encoder::show;
 use mocap_encoder::show::file::ShowSpec;
+use mocap_encoder::show::play::ShowRequest;
 use mocap_encoder::show::play::{show_stream, HostShowRunner, Script};
 use mocap_servo::{HardLimits, HardStep, Identity, Playback, Policy, ServoLimits};
 use mocap_tests::{corpus_dir, corpus_files, workspace_root};
@@ -211,7 +212,9 @@ fn clamps_per_tick(
             break;
         }
         while let Some((at, cmd)) = script.commands.get(next).filter(|(at, _)| *at <= t) {
-            runner.command(*cmd, *at, |_, _| {}).unwrap();
+            if let ShowRequest::Run(cmd) = cmd {
+                runner.command(*cmd, *at, |_, _| {}).unwrap();
+            }
             next += 1;
         }
         runner.tick(t, &mut pose, |_, _| {}).unwrap();
@@ -269,7 +272,10 @@ fn blend_safety(label: &str, bytes: &[u8], figure: &Figure, pairs: &[(u16, u16)]
             let at = tick_us(at_tick, rate_mhz);
             let end = at + fade_us + 1_000_000;
             let script = Script {
-                commands: vec![(0, Command::Play(a)), (at, Command::Play(b))],
+                commands: vec![
+                    (0, ShowRequest::Run(Command::Play(a))),
+                    (at, ShowRequest::Run(Command::Play(b))),
+                ],
                 end_us: Some(end),
             };
             let played = show_stream(&show, &script, Protocol::Maestro, None, Some(figure), 600.0)
