@@ -143,3 +143,29 @@ echo '```text'
 MOCAP_CORPUS="$corpus_abs" mocap_logged "$log" cargo test --release -q -p mocap-tests --test show_blend_safety -- --nocapture
 grep -oE '(cmu_servo|demo): .*' "$log" | tail -n 8
 echo '```'
+
+echo
+echo "## The show on the microcontroller (cargo test --release -p mocap-tests --test qemu_show -- --nocapture)"
+echo
+echo '```text'
+mocap_logged "$log" cargo test --release -q -p mocap-tests --test qemu_show -- --nocapture
+grep -E '^(microbit|lm3s6965|mps2-an386) [a-z]+: # (mode=show|show_ticks|blend_ticks|plain_ticks|stack)' "$log" || true
+echo '```'
+echo
+echo "## Show firmware flash (scripts/firmware.sh size --board B --clip firmware-example/clips/demo_show.mcb --servo maestro)"
+echo
+echo '```text'
+for b in microbit lm3s6965; do
+    printf '%s: ' "$b"
+    bash scripts/firmware.sh size --board "$b" --clip firmware-example/clips/demo_show.mcb --servo maestro 2>>"$log" \
+        | grep -E '^(flash_bytes|flash_without_clip_bytes)=' | tr '\n' ' '
+    echo
+done
+echo '```'
+echo
+echo "## Clock following (cargo test --release -p mocap-tests --test show_clock -- --nocapture)"
+echo
+echo '```text'
+mocap_logged "$log" cargo test --release -q -p mocap-tests --test show_clock -- --nocapture
+grep -E '^clock ' "$log" || true
+echo '```'
