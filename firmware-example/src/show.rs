@@ -39,39 +39,80 @@ pub struct ShowMode {
     pub calibration_ticks: u32,
 }
 
-/// Takes the frames that have arrived, while the queue has room (the rest wait in the link
-/// and the UART): commands into the queue (in arrival order), timecodes into the clock.
-/// Counts what it could not take.
-fn take(
-    link: &mut Link,
-    queue: &mut Deque<Pending, QUEUE>,
-    clock: &mut ShowClock,
-    local_us: u64,
-    rejected: &mut u32,
-) {
-    while !queue.is_full() {
-        let Some(event) = link.poll() else { return };
+/// What came over the link: the commands waiting for their time, and how far the sender has
+/// vouched for the show (lockstep).
+struct Inbox {
+    queue: Deque<Pending, QUEUE>,
+    /// After a first `Sync`: every command up to this show time (µs) has arrived; the show
+    /// clock waits here. `None`: free-running (commands act when they arrive).
+    horizon: Option<u64>,
+    /// A first `Show` frame arrived: the show clock runs.
+    started: bool,
+    rejected: u32,
+}
+
+impl Inbox {
+    fn new() -> Self {
+        Inbox {
+            queue: Deque::new(),
+            horizon: None,
+            started: false,
+            rejected: 0,
+        }
+    }
+
+    /// One frame: a command into the queue, a `Sync` moves the horizon (an `End` makes it
+    /// endless), a timecode into the clock.
+    fn accept(&mut self, event: Event, clock: &mut ShowClock, local_us: u64) {
         match event {
-            Event::Show { at_ms, op, arg, ms } => match show_request(op, arg, ms) {
-                Some(r) if queue.push_back((u64::from(at_ms) * 1000, r)).is_ok() => {}
-                _ => *rejected += 1,
-            },
+            Event::Show { at_ms, op, arg, ms } => {
+                self.started = true;
+                let at = u64::from(at_ms) * 1000;
+                match show_request(op, arg, ms) {
+                    Some(ShowRequest::Sync) => {
+                        let h = if at_ms == u32::MAX { u64::MAX } else { at };
+                        self.horizon = Some(self.horizon.unwrap_or(0).max(h));
+                    }
+                    Some(r) if self.queue.push_back((at, r)).is_ok() => {
+                        if r == ShowRequest::End {
+                            self.horizon = self.horizon.map(|_| u64::MAX);
+                        }
+                    }
+                    _ => self.rejected += 1,
+                }
+            }
             Event::Timecode { show_ms } => clock.timecode(local_us, u64::from(show_ms) * 1000),
             // A session's greeting: nothing to do.
             Event::Hello => {}
             // A host that stops (`mocap send`, Ctrl-C): stop now and end, at rest.
             Event::Stop => {
                 let now = clock.now(local_us);
-                if queue
+                self.horizon = self.horizon.map(|_| u64::MAX);
+                if self
+                    .queue
                     .push_back((now, ShowRequest::Run(Command::Stop)))
                     .is_err()
-                    || queue.push_back((now, ShowRequest::End)).is_err()
+                    || self.queue.push_back((now, ShowRequest::End)).is_err()
                 {
-                    *rejected += 1;
+                    self.rejected += 1;
                 }
             }
-            _ => *rejected += 1,
+            _ => self.rejected += 1,
         }
+    }
+
+    /// Takes the frames that have arrived, while the queue has room (the rest wait in the link
+    /// and the UART).
+    fn take(&mut self, link: &mut Link, clock: &mut ShowClock, local_us: u64) {
+        while !self.queue.is_full() {
+            let Some(event) = link.poll() else { return };
+            self.accept(event, clock, local_us);
+        }
+    }
+
+    /// Whether the show clock must wait for the sender before show time `t`.
+    fn behind(&self, t: u64) -> bool {
+        self.horizon.is_some_and(|h| h < t) && !self.queue.is_full()
     }
 }
 
@@ -95,18 +136,12 @@ impl Mode for ShowMode {
             )
             .nl();
         let mut link = Link::new(Rx::take());
-        let mut queue: Deque<Pending, QUEUE> = Deque::new();
+        let mut inbox = Inbox::new();
         let mut clock = ShowClock::new(DEFAULT_SLEW_PPM);
-        let mut rejected = 0u32;
-        // The show starts with the first command.
-        while queue.is_empty() {
+        // The show starts with the first `Show` frame.
+        while !inbox.started {
             match link.wait() {
-                Some(Event::Show { at_ms, op, arg, ms }) => match show_request(op, arg, ms) {
-                    Some(r) if queue.push_back((u64::from(at_ms) * 1000, r)).is_ok() => {}
-                    _ => rejected += 1,
-                },
-                Some(Event::Hello) => {}
-                Some(_) => rejected += 1,
+                Some(event) => inbox.accept(event, &mut clock, 0),
                 None => {
                     driver.park_after(Fault::StreamTimeout, text)?;
                     return Ok(());
@@ -124,8 +159,18 @@ impl Mode for ShowMode {
         let mut last_t = 0u64;
         loop {
             let local = driver.rig.tick_us(i);
-            take(&mut link, &mut queue, &mut clock, local, &mut rejected);
+            inbox.take(&mut link, &mut clock, local);
             let t = clock.now(local);
+            // Lockstep: wait until the sender has vouched for this tick's time.
+            while inbox.behind(t) {
+                match link.wait() {
+                    Some(event) => inbox.accept(event, &mut clock, local),
+                    None => {
+                        driver.park_after(Fault::StreamTimeout, text)?;
+                        return Ok(());
+                    }
+                }
+            }
             if end.is_some_and(|e| t > e) {
                 break;
             }
@@ -136,16 +181,17 @@ impl Mode for ShowMode {
                 }
             };
             let mut status = None;
-            while let Some(&(at, request)) = queue.front().filter(|(at, _)| *at <= t) {
-                queue.pop_front();
+            while let Some(&(at, request)) = inbox.queue.front().filter(|(at, _)| *at <= t) {
+                inbox.queue.pop_front();
                 match request {
                     ShowRequest::Run(c) => match runner.command(c, at.max(last_t), &mut emit) {
                         Ok(()) => {}
                         // A clip or list the show does not have: nothing changes.
-                        Err(_) => rejected += 1,
+                        Err(_) => inbox.rejected += 1,
                     },
                     ShowRequest::End => end = Some(at),
                     ShowRequest::Status => status = Some(at.max(last_t)),
+                    ShowRequest::Sync => {}
                 }
             }
             let now = runner
@@ -186,7 +232,11 @@ impl Mode for ShowMode {
             }
             last_t = t;
             i += 1;
-            if end.is_none() && queue.is_empty() && runner.is_done() {
+            if end.is_none()
+                && inbox.queue.is_empty()
+                && inbox.horizon.is_none_or(|h| h == u64::MAX)
+                && runner.is_done()
+            {
                 break;
             }
         }
@@ -206,7 +256,7 @@ impl Mode for ShowMode {
         }
         let (timecodes, relocations) = clock.timecodes();
         text.str("#")
-            .kv("commands_rejected", u64::from(rejected))
+            .kv("commands_rejected", u64::from(inbox.rejected))
             .kv("events_dropped", u64::from(dropped_events))
             .kv("timecodes", u64::from(timecodes))
             .kv("relocations", u64::from(relocations))

@@ -177,6 +177,8 @@ pub enum ShowOp {
     End = 9,
     /// Report: the MCU answers with a `ShowStatus`.
     Status = 10,
+    /// Lockstep: every command up to `at_ms` has been sent (`at_ms = u32::MAX`: all of them).
+    Sync = 11,
 }
 
 /// What a `Show` message asks (SPEC.md §8.2).
@@ -188,6 +190,9 @@ pub enum ShowRequest {
     End,
     /// A `ShowStatus` in reply.
     Status,
+    /// Every command up to this `Show`'s time has been sent (the MCU's show clock may run up
+    /// to it; SPEC.md §8.2).
+    Sync,
 }
 
 /// A show command as a `Show` message's fields (`End` is not a command).
@@ -232,6 +237,7 @@ pub fn show_request(op: u8, arg: u16, ms: u32) -> Option<ShowRequest> {
         8 => C::Stop,
         9 => return Some(ShowRequest::End),
         10 => return Some(ShowRequest::Status),
+        11 => return Some(ShowRequest::Sync),
         _ => return None,
     }))
 }

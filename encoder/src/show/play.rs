@@ -259,15 +259,21 @@ pub fn show_stream(
     Ok(ShowPlay { stream, events })
 }
 
+/// Show time between two `Sync` frames of `mocap send --cues`, µs.
+pub const SYNC_EVERY_US: u64 = 1_000_000;
+
 /// How long before its time `mocap send` sends a command, µs: the firmware
 /// queues it ([`Command`]s act at their show time) and a late one acts late.
 pub const SEND_AHEAD_US: u64 = 1_000_000;
 
 /// The frames `mocap send show.mcb --cues` writes for the firmware's show
 /// mode (SPEC.md §8.2), each with the time it is due: `00` and `Hello` and
-/// the first command at once (its arrival starts the show clock), every
-/// other command [`SEND_AHEAD_US`] before its time, then `End` at the
-/// script's `end`.
+/// the first `Show` frame at once (its arrival starts the show clock), every
+/// other command [`SEND_AHEAD_US`] before its time, a `Sync` every
+/// [`SYNC_EVERY_US`] of show time (the firmware then runs in lockstep: its
+/// show clock never passes the last time vouched for, so every command acts
+/// at its own time however the line delivers), then `End` at the script's
+/// `end` (without one, a final `Sync` of `u32::MAX` ms lets the show run free).
 pub fn command_frames(script: &Script) -> Result<Vec<(u64, Vec<u8>)>, PlayError> {
     use mocap_servo::stream::{self, Message, ShowOp};
     let ms = |us: u64| u32::try_from(us / 1000).unwrap_or(u32::MAX);
@@ -281,35 +287,46 @@ pub fn command_frames(script: &Script) -> Result<Vec<(u64, Vec<u8>)>, PlayError>
         version: stream::PROTOCOL_VERSION,
     })?);
     let mut out = vec![(0, hello)];
-    for (i, (at, request)) in script.commands.iter().enumerate() {
-        let due = if i == 0 {
-            0
-        } else {
-            at.saturating_sub(SEND_AHEAD_US)
-        };
-        let m = match request {
-            ShowRequest::Run(cmd) => stream::show_message(ms(*at), *cmd),
-            ShowRequest::Status | ShowRequest::End => Message::Show {
-                at_ms: ms(*at),
-                op: if *request == ShowRequest::Status {
-                    ShowOp::Status as u8
-                } else {
-                    ShowOp::End as u8
-                },
-                arg: 0,
-                ms: 0,
-            },
-        };
-        out.push((due, frame(&m)?));
-    }
-    if let Some(end) = script.end_us {
-        let m = Message::Show {
-            at_ms: ms(end),
-            op: ShowOp::End as u8,
+    let op_frame = |at: u64, op: ShowOp| {
+        frame(&Message::Show {
+            at_ms: ms(at),
+            op: op as u8,
             arg: 0,
             ms: 0,
+        })
+    };
+    let due = |at: u64| at.saturating_sub(SEND_AHEAD_US);
+    // A `Sync` each second of show time (ties: the commands first), so the firmware's show
+    // clock never passes a time whose commands are still on the line.
+    let last = script
+        .end_us
+        .or(script.commands.last().map(|(at, _)| *at))
+        .unwrap_or(0);
+    let mut next_sync = 0u64;
+    for (i, (at, request)) in script.commands.iter().enumerate() {
+        while next_sync < *at {
+            out.push((due(next_sync), op_frame(next_sync, ShowOp::Sync)?));
+            next_sync += SYNC_EVERY_US;
+        }
+        let m = match request {
+            ShowRequest::Run(cmd) => frame(&stream::show_message(ms(*at), *cmd))?,
+            ShowRequest::Status => op_frame(*at, ShowOp::Status)?,
+            ShowRequest::End => op_frame(*at, ShowOp::End)?,
+            ShowRequest::Sync => op_frame(*at, ShowOp::Sync)?,
         };
-        out.push((end.saturating_sub(SEND_AHEAD_US), frame(&m)?));
+        out.push((if i == 0 { 0 } else { due(*at) }, m));
+    }
+    while next_sync <= last {
+        out.push((due(next_sync), op_frame(next_sync, ShowOp::Sync)?));
+        next_sync += SYNC_EVERY_US;
+    }
+    match script.end_us {
+        Some(end) => out.push((due(end), op_frame(end, ShowOp::End)?)),
+        // No end: every command is sent; the show runs free from here.
+        None => out.push((
+            due(last),
+            op_frame(u64::from(u32::MAX) * 1000, ShowOp::Sync)?,
+        )),
     }
     // Due times never go back (a sender writes in order).
     let mut latest = 0;
