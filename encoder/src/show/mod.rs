@@ -202,7 +202,7 @@ pub fn build(spec: &ShowSpec) -> Result<BuiltShow, ShowError> {
         let range = cut_range(spec, c, m)?;
         let cut = cut(m, range);
         if rig.is_none() {
-            let names = channel_names(m);
+            let names = m.skeleton.channel_names();
             match &first {
                 None => first = Some((k, names, m.frame_time)),
                 Some((f, first_names, first_time)) => {
@@ -231,12 +231,6 @@ pub fn build(spec: &ShowSpec) -> Result<BuiltShow, ShowError> {
         singles.push(encode_one(c, &cut, rig.as_ref(), range, m.frame_time)?);
     }
     assemble_show(spec, &singles)
-}
-
-/// `Joint.Kind` of every channel, then the offsets of every joint (µm of
-/// the file's units) — what a shared header must hold for every clip.
-fn channel_names(m: &Motion) -> Vec<String> {
-    m.skeleton.channel_names()
 }
 
 fn first_difference(a: &[String], b: &[String]) -> Option<String> {
@@ -502,7 +496,7 @@ fn assemble_show(spec: &ShowSpec, singles: &[Single]) -> Result<BuiltShow, ShowE
             let bytes = assemble_version(
                 consts::VERSION_SHOW,
                 &show_sections(
-                    &one_clip(&shared, &clips[i]),
+                    &one_clip(&clips[i])?,
                     &[one],
                     &codecs[i..=i],
                     &cues_for_one(&cues),
@@ -548,16 +542,8 @@ fn assemble_show(spec: &ShowSpec, singles: &[Single]) -> Result<BuiltShow, ShowE
 }
 
 /// The shared sections of a one-clip show of `clip` (its own frame count).
-fn one_clip(shared: &Shared, clip: &Clip<'_>) -> Shared {
-    let mut s = Shared {
-        header: shared.header.clone(),
-        rig: shared.rig.clone(),
-        digest: shared.digest.clone(),
-    };
-    if let Ok(one) = shared_sections(std::slice::from_ref(clip)) {
-        s.header = one.header;
-    }
-    s
+fn one_clip(clip: &Clip<'_>) -> Result<Shared, ShowError> {
+    shared_sections(std::slice::from_ref(clip))
 }
 
 /// The cue section without lists, idle clips or triggers (which name
