@@ -61,7 +61,7 @@ fi
 "$mocap" send "$out/demo_show.mcb" --cues assets/shows/demo_cues.txt --output "$out/show_cmds.bin" --fast
 echo "playing the show on Cortex-M3 (QEMU, show mode, commands over the UART)…" >&2
 bash scripts/firmware.sh run --board lm3s6965 --clip "$out/demo_show.mcb" --servo maestro \
-    --input "$out/show_cmds.bin" --icount >"$out/uart_show.txt"
+    --input "$out/show_cmds.bin" --stream-timeout 0 --icount >"$out/uart_show.txt"
 grep -E '^# (mode=show|event|show_ticks|blend_ticks|plain_ticks)' "$out/uart_show.txt"
 fw_hex=$(grep '^m' "$out/uart_show.txt" | sed 's/^m//' | tr -d ' \n')
 host_hex=$(od -An -v -tx1 "$out/show_host.maestro" | tr -d ' \n')

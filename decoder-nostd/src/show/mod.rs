@@ -308,8 +308,14 @@ impl<'a> Show<'a> {
 
     /// Clip `i` as a [`Clip`] to play with a [`Player`](crate::Player).
     pub fn clip(&self, i: u16) -> Result<Clip<'a>, Error> {
+        self.entry_and_clip(i).map(|(_, clip)| clip)
+    }
+
+    /// Entry `i` of the show table and its clip, the table walked once.
+    pub fn entry_and_clip(&self, i: u16) -> Result<(ShowClip<'a>, Clip<'a>), Error> {
         let entry = self.entry(i)?;
-        self.open(&entry, i)
+        let clip = self.open(&entry, i)?;
+        Ok((entry, clip))
     }
 
     /// The number of the clip called `name`.

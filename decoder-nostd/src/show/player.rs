@@ -340,8 +340,7 @@ impl<'a, const N: usize, const C: usize> ShowPlayer<'a, N, C> {
     /// Starts `clip` at local time `local_us` at show time `t`, blended over
     /// `dur` µs from what plays.
     fn transition(&mut self, clip: u16, local_us: u64, dur: u64, t: u64) -> Result<(), Error> {
-        let c = self.show.clip(clip)?;
-        let entry = self.show.entry(clip)?;
+        let (entry, c) = self.show.entry_and_clip(clip)?;
         let player = Player::<N>::new(&c)?;
         let slot = Slot {
             player,
