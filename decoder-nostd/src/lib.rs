@@ -35,6 +35,7 @@ mod clip;
 mod codec;
 pub mod consts;
 mod error;
+mod frame_time;
 mod header;
 mod player;
 mod reader;

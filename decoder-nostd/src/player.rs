@@ -4,7 +4,8 @@
 use crate::clip::Clip;
 use crate::codec::Codec;
 use crate::error::Error;
-use core::num::{NonZeroU32, NonZeroU64};
+use crate::frame_time::FrameTime;
+use core::num::NonZeroU32;
 
 /// Plays a clip of at most `N` channels.
 ///
@@ -15,20 +16,25 @@ use core::num::{NonZeroU32, NonZeroU64};
 /// less room the same values are decoded, more slowly — or the
 /// `predictive` codec's two frames, contexts, probabilities and coder
 /// (`3·C + 19` words; a smaller `N` is refused) — so
-/// `size_of::<Player<N>>()` is `4·N + 152` bytes on a 32-bit MCU
+/// `size_of::<Player<N>>()` is `4·N + 176` bytes on a 32-bit MCU
 /// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
 #[derive(Clone, Debug)]
+// Declaration order: the words every call reads first, within reach of the
+// Cortex-M0's load offsets (at most 124 bytes from the player), the state
+// array last. (Rust's own order put them past the array.)
+#[repr(C)]
 pub struct Player<'a, const N: usize> {
-    codec: Codec<'a>,
     channels: usize,
     frames: u32,
-    /// Frame time in ns, validated non-zero (§3.2): dividing by it cannot panic.
-    frame_time_ns: NonZeroU32,
-    /// The frame held in `state`, if any.
-    state_frame: Option<u32>,
     /// Next frame [`Player::next_frame`] returns.
     cursor: u32,
+    /// The frame held in `state`, if any.
+    state_frame: Option<u32>,
+    /// Splits `sample_at`'s times into frames and fractions (frame time
+    /// validated non-zero, §3.2).
+    frame_time: FrameTime,
+    codec: Codec<'a>,
     /// Where the `pca-spline` codec is in its segment list.
     #[cfg(feature = "codec-pca-spline")]
     segment: crate::codec::pca_spline::Cursor<'a>,
@@ -62,8 +68,10 @@ impl<'a, const N: usize> Player<'a, N> {
             codec,
             channels,
             frames: header.frame_count(),
-            frame_time_ns: NonZeroU32::new(header.frame_time_ns())
-                .ok_or(Error::PlayerInvariant { frame: 0 })?,
+            frame_time: FrameTime::new(
+                NonZeroU32::new(header.frame_time_ns())
+                    .ok_or(Error::PlayerInvariant { frame: 0 })?,
+            ),
             state_frame: None,
             cursor: 0,
             #[cfg(feature = "codec-pca-spline")]
@@ -123,7 +131,7 @@ impl<'a, const N: usize> Player<'a, N> {
             Codec::PcaSpline(c) => c
                 .decode_at(pos, &mut self.segment, out, &mut self.state)
                 .map(|()| true)
-                .ok_or(Error::PlayerInvariant {
+                .ok_or_else(|| Error::PlayerInvariant {
                     frame: u32::try_from(pos >> 16).unwrap_or(u32::MAX),
                 }),
             _ => {
@@ -140,13 +148,12 @@ impl<'a, const N: usize> Player<'a, N> {
     pub fn sample_at(&mut self, t_us: u64, out: &mut [i32]) -> Result<(), Error> {
         let out = self.output(out)?;
         let ns = t_us.saturating_mul(1000);
-        let period = NonZeroU64::from(self.frame_time_ns);
-        let (whole, frac) = (ns / period, ((ns % period) << 16) / period);
+        let (whole, frac) = self.frame_time.split(ns);
         let last = self.frames.wrapping_sub(1);
         let pos = if whole >= u64::from(last) {
             u64::from(last) << 16
         } else {
-            (whole << 16) | frac
+            (whole << 16) | u64::from(frac)
         };
         if self.pose_at(pos, out)? {
             return Ok(());
@@ -239,10 +246,16 @@ impl<'a, const N: usize> Player<'a, N> {
     }
 }
 
-/// `a + (b − a) · frac / 2^16` in wrapping fixed point (SPEC.md §6).
-fn mix(a: i32, b: i32, frac: u64) -> i32 {
-    let d = i64::from(b.wrapping_sub(a));
-    a.wrapping_add((d.wrapping_mul(frac as i64) >> 16) as i32)
+/// `a + (b − a) · frac / 2^16` in wrapping fixed point (SPEC.md §6: the
+/// product in 64 bits, `>>` arithmetic), for `frac < 2^16`, in 32-bit
+/// products: with `d = b − a = hi · 2^16 + lo`, `0 ≤ lo < 2^16`,
+/// `⌊d · frac / 2^16⌋ = hi · frac + ⌊lo · frac / 2^16⌋` (the first term is a
+/// whole multiple of `2^16`), and `|hi · frac| < 2^31`, `lo · frac < 2^32`.
+fn mix(a: i32, b: i32, frac: u32) -> i32 {
+    let d = b.wrapping_sub(a);
+    let hi = (d >> 16).wrapping_mul(frac as i32);
+    let lo = ((d as u32 & 0xffff).wrapping_mul(frac) >> 16) as i32;
+    a.wrapping_add(hi).wrapping_add(lo)
 }
 
 /// Decodes frame `f` into `values`, which hold frame `f - 1` if `f` is not
@@ -266,5 +279,48 @@ fn copy_values(dst: &mut [i32], src: &[i32]) {
     let n = dst.len().min(src.len());
     if let (Some(d), Some(s)) = (dst.get_mut(..n), src.get(..n)) {
         d.copy_from_slice(s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mix;
+
+    /// SPEC.md §6 as written.
+    fn spec(a: i32, b: i32, frac: u32) -> i32 {
+        a.wrapping_add(((i64::from(b.wrapping_sub(a)) * i64::from(frac)) >> 16) as i32)
+    }
+
+    #[test]
+    fn mix_is_the_specs_64_bit_product() {
+        let edges = [
+            i32::MIN,
+            i32::MIN + 1,
+            -65_537,
+            -65_536,
+            -65_535,
+            -1,
+            0,
+            1,
+            65_535,
+            65_536,
+            i32::MAX,
+        ];
+        let fracs = [0u32, 1, 2, 32_767, 32_768, 65_534, 65_535];
+        for &a in &edges {
+            for &b in &edges {
+                for &f in &fracs {
+                    assert_eq!(mix(a, b, f), spec(a, b, f), "{a} {b} {f}");
+                }
+            }
+        }
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..1_000_000 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let (a, b, f) = (s as i32, (s >> 32) as i32, (s >> 16) as u32 & 0xffff);
+            assert_eq!(mix(a, b, f), spec(a, b, f), "{a} {b} {f}");
+        }
     }
 }
