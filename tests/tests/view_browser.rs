@@ -1,0 +1,223 @@
+//! `mocap view` pages opened in a real browser (headless Chromium): the
+//! shipped demo with its clip, and a corpus clip with its encoding. The page
+//! must draw the skeletons, play (its frame readout advances with the
+//! browser's virtual time), and scrub to the worst-error frame the Rust side
+//! computed (`mocap eval`'s). Without Chromium the tests print SKIPPED
+//! (under `CI` they fail); screenshots are kept in `target/view-browser/`.
+
+use std::path::{Path, PathBuf};
+
+use mocap_report::view;
+use mocap_tests::{body_data, browse, chromium, corpus_file, workspace_root, BrowserOutput};
+
+fn out_dir() -> PathBuf {
+    let d = workspace_root().join("target/view-browser");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn frame_of(dom: &str) -> usize {
+    body_data(dom, "frame")
+        .unwrap_or_else(|| panic!("no data-frame on <body>: {}", &dom[..dom.len().min(400)]))
+        .parse()
+        .unwrap()
+}
+
+/// Pixels of a screenshot inside `rect` (x, y, w, h): how many are close to
+/// `colour` (the original's blue, within 40 in each channel), and how many
+/// are in the heat colours (green, yellow, red: strongly coloured, max − min
+/// channel ≥ 60, and blue well below red or green), which the blue's
+/// anti-aliased edges are not.
+fn count_pixels(png_path: &Path, rect: [u32; 4], colour: [u8; 3]) -> (usize, usize) {
+    let decoder = png::Decoder::new(std::fs::File::open(png_path).unwrap());
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    assert!(channels >= 3, "{:?}", info.color_type);
+    let (mut near, mut other) = (0, 0);
+    for y in rect[1]..(rect[1] + rect[3]).min(info.height) {
+        for x in rect[0]..(rect[0] + rect[2]).min(info.width) {
+            let i = (y as usize * info.width as usize + x as usize) * channels;
+            let p = [buf[i], buf[i + 1], buf[i + 2]];
+            let close = (0..3).all(|k| p[k].abs_diff(colour[k]) <= 40);
+            let spread = p.iter().max().unwrap() - p.iter().min().unwrap();
+            if close {
+                near += 1;
+            } else if spread >= 60 && u16::from(p[2]) + 30 < u16::from(p[0].max(p[1])) {
+                other += 1;
+            }
+        }
+    }
+    (near, other)
+}
+
+/// The 3-D view's rectangle from the page (`data-view`, CSS px = screen px
+/// at scale 1), less a 220 × 70 corner at the top right where the legend's
+/// colour bar is.
+fn view_rect(dom: &str) -> [u32; 4] {
+    let v: Vec<u32> = body_data(dom, "view")
+        .expect("data-view")
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    [v[0], v[1] + 70, v[2] - 220, v[3] - 70]
+}
+
+/// The page's blue of the original skeleton (viewer.js `COLOR_ORIGINAL`).
+const ORIGINAL: [u8; 3] = [0x3b, 0x6f, 0xc4];
+
+#[test]
+fn demo_page_plays_and_scrubs_in_chromium() {
+    let Some(browser) = chromium() else {
+        return;
+    };
+    let root = workspace_root();
+    let bvh = root.join("assets/animatronic_demo.bvh");
+    let clip = root.join("firmware-example/clips/demo.mcb");
+    let page = view::load(&bvh, Some(&clip), None).unwrap();
+    let worst = page.metrics.as_ref().unwrap().max_joint_err_frame;
+    let html = out_dir().join("demo.html");
+    std::fs::write(&html, &page.html).unwrap();
+
+    // Paused at frame 0: ready, the demo's 480 frames, the Rust side's worst frame.
+    let dom = browse(&browser, &html, "frame=0&paused=1", 500, BrowserOutput::Dom);
+    assert_eq!(
+        body_data(&dom, "ready").as_deref(),
+        Some("1"),
+        "page not ready"
+    );
+    assert_eq!(body_data(&dom, "frames"), Some(page.frames.to_string()));
+    assert_eq!(body_data(&dom, "worst"), Some(worst.to_string()));
+    assert_eq!(frame_of(&dom), 0);
+    assert_eq!(body_data(&dom, "playing").as_deref(), Some("0"));
+    let rect = view_rect(&dom);
+
+    // Playing: the frame follows the clock (60 Hz demo, 8 s: no wrap).
+    let early = frame_of(&browse(&browser, &html, "frame=0", 400, BrowserOutput::Dom));
+    let late = frame_of(&browse(
+        &browser,
+        &html,
+        "frame=0",
+        1600,
+        BrowserOutput::Dom,
+    ));
+    assert!(
+        0 < early && early < late && late < page.frames,
+        "frames {early} then {late} of {}",
+        page.frames
+    );
+
+    // Scrubbing by the hash: the worst frame, and a given frame, paused.
+    let dom = browse(
+        &browser,
+        &html,
+        "frame=worst&paused=1",
+        800,
+        BrowserOutput::Dom,
+    );
+    assert_eq!(frame_of(&dom), worst);
+    let dom = browse(
+        &browser,
+        &html,
+        "frame=123&paused=1",
+        800,
+        BrowserOutput::Dom,
+    );
+    assert_eq!(frame_of(&dom), 123);
+
+    // The worst frame drawn: the original in blue, the decoded skeleton in
+    // its heat colours, in the 3-D view.
+    let shot = out_dir().join("demo_worst.png");
+    browse(
+        &browser,
+        &html,
+        "frame=worst&paused=1",
+        800,
+        BrowserOutput::Screenshot(&shot),
+    );
+    let (blue, heat) = count_pixels(&shot, rect, ORIGINAL);
+    eprintln!("demo worst frame {worst}: {blue} original pixels, {heat} decoded (heat) pixels");
+    assert!(blue > 500, "original skeleton not drawn: {blue} pixels");
+    assert!(heat > 200, "decoded skeleton not drawn: {heat} pixels");
+
+    // Without the clip: the original alone, no heat colours.
+    let alone = view::load(&bvh, None, None).unwrap();
+    let html = out_dir().join("demo_alone.html");
+    std::fs::write(&html, &alone.html).unwrap();
+    let shot = out_dir().join("demo_alone.png");
+    browse(
+        &browser,
+        &html,
+        "frame=100&paused=1",
+        800,
+        BrowserOutput::Screenshot(&shot),
+    );
+    let (blue, heat) = count_pixels(&shot, rect, ORIGINAL);
+    assert!(blue > 500, "skeleton not drawn: {blue} pixels");
+    assert!(heat < 20, "{heat} heat pixels without a clip");
+}
+
+#[test]
+fn corpus_clip_page_in_chromium() {
+    let Some(bvh) = corpus_file("cmu", "05_04.bvh") else {
+        return;
+    };
+    let Some(browser) = chromium() else {
+        return;
+    };
+    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    let m = mocap_encoder::bvh::read_file(&bvh).unwrap();
+    let unit = mocap_encoder::units::detect(&m);
+    let enc = encode::encode(
+        &m,
+        &EncodeOptions {
+            codec: CodecChoice::Index,
+            bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
+            metres_per_unit: unit.metres(),
+            key_interval: None,
+        },
+    )
+    .unwrap();
+    let clip = out_dir().join("05_04.mcb");
+    std::fs::write(&clip, &enc.bytes).unwrap();
+    let page = view::load(&bvh, Some(&clip), None).unwrap();
+    let x = page.metrics.as_ref().unwrap();
+    eprintln!(
+        "{}: {} frames × {} joints: page {} bytes (positions to {} mm); ARMS {:.3} mm, worst frame {}",
+        bvh.display(),
+        page.frames,
+        page.joints,
+        page.html.len(),
+        page.quantum_mm,
+        x.arms_mm,
+        x.max_joint_err_frame
+    );
+    // 05_04 is 10 s at 120 Hz: the size target.
+    assert_eq!(page.frames, 1200);
+    assert!(page.html.len() < 2_000_000, "{} bytes", page.html.len());
+    assert_eq!(page.quantum_mm, 0.1);
+    let html = out_dir().join("05_04.html");
+    std::fs::write(&html, &page.html).unwrap();
+    let dom = browse(
+        &browser,
+        &html,
+        "frame=worst&paused=1",
+        1000,
+        BrowserOutput::Dom,
+    );
+    assert_eq!(frame_of(&dom), x.max_joint_err_frame);
+    let shot = out_dir().join("05_04_worst.png");
+    browse(
+        &browser,
+        &html,
+        "frame=worst&paused=1",
+        1000,
+        BrowserOutput::Screenshot(&shot),
+    );
+    let (blue, heat) = count_pixels(&shot, view_rect(&dom), ORIGINAL);
+    assert!(
+        blue > 300 && heat > 100,
+        "{blue} original, {heat} heat pixels"
+    );
+}
