@@ -239,7 +239,8 @@
     const off = S.side && hasClip ? size * 0.45 : 0;
     const sl = [-c.right[0] * off, 0, -c.right[2] * off];
     const sr = [c.right[0] * off, 0, c.right[2] * off];
-    if (S.showOriginal || !hasClip) skeleton(c, orig, f, sl, () => COLOR_ORIGINAL, hasClip ? 5 : 4);
+    const width = hasClip && !S.side ? 5 : 3.5; // under the decoded one: wider
+    if (S.showOriginal || !hasClip) skeleton(c, orig, f, sl, () => COLOR_ORIGINAL, width);
     if (hasClip && S.showDecoded) {
       skeleton(c, dec, f, sr, (j) => heat(err[f * J + j] / errScale), 2.5);
     }
