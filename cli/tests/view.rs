@@ -1,7 +1,9 @@
 //! `mocap view` end to end: the page of the shipped demo and its clip is one
-//! self-contained file, and inputs that do not belong together (a clip of
-//! another skeleton, a clip longer than its source, a servo clip, a file
-//! that is no clip) fail with a message that names the files, writing no page.
+//! self-contained file, a servo clip gets its curves page (alone, or with
+//! its source and rig), and inputs that do not belong together (a clip of
+//! another skeleton, a clip longer than its source, a servo clip without its
+//! rig, a servo clip with another rig, a file that is no clip) fail with a
+//! message that names the files, writing no page.
 //! The page in a browser: `tests/tests/view_browser.rs`.
 
 use std::path::{Path, PathBuf};
@@ -192,6 +194,90 @@ fn view_refuses_what_does_not_belong_together() {
         text(&o.stderr).starts_with(&format!("mocap: error: {}: ", s(&junk))),
         "{}",
         text(&o.stderr)
+    );
+    assert!(!d.join("x.html").exists(), "a page was written");
+}
+
+#[test]
+fn view_a_servo_clip_alone_and_with_its_source() {
+    let d = out_dir("view-servo");
+    let demo = root().join("assets/animatronic_demo.bvh");
+    let rig = root().join("assets/rigs/animatronic_demo.toml");
+    let wide = root().join("assets/rigs/animatronic_demo_wide.toml");
+    let servo = d.join("servo.mcb");
+    let o = mocap_in(
+        &d,
+        &[
+            "encode",
+            "--rig",
+            s(&rig),
+            "--max-error",
+            "0.5deg",
+            s(&demo),
+            "-o",
+            s(&servo),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+
+    // Alone: the clip's own rig table; default name from the clip.
+    let o = mocap_in(&d, &["view", s(&servo)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(err.starts_with("wrote servo.html ("), "{err}");
+    assert!(err.contains("12 servos × "), "{err}");
+    let page = std::fs::read_to_string(d.join("servo.html")).expect("page");
+    assert!(page.contains(r#""kind":"servo""#) && page.contains(r#""sourcePulses":null"#));
+
+    // With its source and rig: the rig's names and signals.
+    let o = mocap_in(
+        &d,
+        &[
+            "view",
+            s(&demo),
+            s(&servo),
+            "--rig",
+            s(&rig),
+            "-o",
+            "with.html",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("largest pulse difference, decoded against the source: "));
+    let page = std::fs::read_to_string(d.join("with.html")).expect("page");
+    assert!(page.contains(r#""name":"torso_twist""#) && page.contains(r#""sourcePulses":[["#));
+
+    // Another rig (same servos, wider ranges): refused by the clip's rig digest.
+    let o = mocap_in(
+        &d,
+        &[
+            "view",
+            s(&demo),
+            s(&servo),
+            "--rig",
+            s(&wide),
+            "-o",
+            "x.html",
+        ],
+    );
+    assert!(!o.status.success());
+    assert_eq!(
+        text(&o.stderr),
+        format!(
+            "mocap: error: {} does not play against {}: the clip was encoded for another rig\n",
+            s(&servo),
+            s(&wide)
+        )
+    );
+    // A motion clip viewed as a servo clip.
+    let motion = root().join("firmware-example/clips/demo.mcb");
+    let o = mocap_in(&d, &["view", s(&motion), "-o", "x.html"]);
+    assert_eq!(
+        text(&o.stderr),
+        format!(
+            "mocap: error: {}: not a servo clip (give its source BVH first to view a motion clip)\n",
+            s(&motion)
+        )
     );
     assert!(!d.join("x.html").exists(), "a page was written");
 }

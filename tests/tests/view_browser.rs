@@ -1,14 +1,18 @@
 //! `mocap view` pages opened in a real browser (headless Chromium): the
-//! shipped demo with its clip, and a corpus clip with its encoding. The page
-//! must draw the skeletons, play (its frame readout advances with the
-//! browser's virtual time), and scrub to the worst-error frame the Rust side
-//! computed (`mocap eval`'s). Without Chromium the tests print SKIPPED
+//! shipped demo with its clip, a corpus clip with its encoding, and the
+//! demo's servo clip. The page must draw the skeletons (or the servo
+//! curves), play (its frame readout advances with the browser's virtual
+//! time), and scrub to the worst-error frame the Rust side computed
+//! (`mocap eval`'s). Without Chromium the tests print SKIPPED
 //! (under `CI` they fail); screenshots are kept in `target/view-browser/`.
 
 use std::path::{Path, PathBuf};
 
-use mocap_report::view;
-use mocap_tests::{body_data, browse, chromium, corpus_file, workspace_root, BrowserOutput};
+use mocap_report::view::{self, ServoSource};
+use mocap_tests::{
+    body_data, browse, chromium, corpus_file, servo_demo_clip, workspace_root, BrowserOutput,
+    DEMO_RIG,
+};
 
 fn out_dir() -> PathBuf {
     let d = workspace_root().join("target/view-browser");
@@ -220,4 +224,72 @@ fn corpus_clip_page_in_chromium() {
         blue > 300 && heat > 100,
         "{blue} original, {heat} heat pixels"
     );
+}
+
+#[test]
+fn servo_clip_page_in_chromium() {
+    let Some(browser) = chromium() else {
+        return;
+    };
+    let root = workspace_root();
+    let (clip, _) = servo_demo_clip("view_servo");
+    let page = view::load_servo(
+        &clip,
+        Some(ServoSource {
+            bvh: &root.join("assets/animatronic_demo.bvh"),
+            rig: &root.join(DEMO_RIG),
+            unit: None,
+        }),
+    )
+    .unwrap();
+    // The demo rig's 12 servos at 50 Hz over 8 s; the playback loop starts
+    // at neutral, so it changes the first ticks at least.
+    assert_eq!(page.servos, 12);
+    assert_eq!(page.ticks, 401);
+    assert!(page.shaped_ticks > 0);
+    // pca-spline at 0.5° of travel: within a few µs of the rig's signal.
+    let e = page.max_error_us.unwrap();
+    assert!(e > 0.0 && e < 20.0, "{e} µs");
+    let html = out_dir().join("servo.html");
+    std::fs::write(&html, &page.html).unwrap();
+
+    let dom = browse(
+        &browser,
+        &html,
+        "frame=100&paused=1",
+        500,
+        BrowserOutput::Dom,
+    );
+    assert_eq!(body_data(&dom, "ready").as_deref(), Some("1"));
+    assert_eq!(body_data(&dom, "frames"), Some(page.ticks.to_string()));
+    assert_eq!(
+        body_data(&dom, "shaped"),
+        Some(page.shaped_ticks.to_string())
+    );
+    assert_eq!(frame_of(&dom), 100);
+    let early = frame_of(&browse(&browser, &html, "frame=0", 400, BrowserOutput::Dom));
+    let late = frame_of(&browse(
+        &browser,
+        &html,
+        "frame=0",
+        1600,
+        BrowserOutput::Dom,
+    ));
+    assert!(0 < early && early < late, "ticks {early} then {late}");
+
+    // The curves drawn: the decoded blue and the commanded orange.
+    let shot = out_dir().join("servo.png");
+    browse(
+        &browser,
+        &html,
+        "frame=100&paused=1",
+        500,
+        BrowserOutput::Screenshot(&shot),
+    );
+    let rows = [150, 60, 1000, 700];
+    let (blue, _) = count_pixels(&shot, rows, ORIGINAL);
+    let (orange, _) = count_pixels(&shot, rows, [0xe0, 0x7b, 0x00]);
+    eprintln!("servo page: {blue} decoded pixels, {orange} commanded pixels");
+    assert!(blue > 2000, "decoded curves not drawn: {blue} pixels");
+    assert!(orange > 500, "commanded curves not drawn: {orange} pixels");
 }

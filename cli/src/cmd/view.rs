@@ -1,18 +1,19 @@
 //! `mocap view`: one self-contained HTML page that plays a BVH as a 3-D
-//! skeleton, with its decoded `.mcb` clip overlaid and coloured by error
-//! (`mocap_report::view`).
+//! skeleton, with its decoded `.mcb` clip overlaid and coloured by error,
+//! or a servo clip's pulse curves against its limits (`mocap_report::view`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use mocap_report::view;
+use mocap_report::view::{self, ServoSource};
 
 use super::{write, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The source BVH.
+    /// The source BVH, or a servo clip (`.mcb`) to view alone.
     input: PathBuf,
-    /// Its `.mcb` clip, shown decoded beside it.
+    /// The BVH's `.mcb` clip: a motion clip, shown decoded beside it, or a
+    /// servo clip (with `--rig`), its curves beside the rig's signals.
     clip: Option<PathBuf>,
     /// Output page (default: the input's stem + `.html`, in the current folder).
     #[arg(short, long)]
@@ -20,6 +21,13 @@ pub struct Args {
     /// Length unit of the input.
     #[arg(long, default_value = "auto")]
     units: UnitArg,
+    /// The rig file a servo clip was encoded with (its source BVH first).
+    #[arg(long, requires = "clip")]
+    rig: Option<PathBuf>,
+}
+
+fn is_clip(p: &Path) -> bool {
+    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcb"))
 }
 
 pub fn run(a: Args) -> super::Result {
@@ -27,11 +35,44 @@ pub fn run(a: Args) -> super::Result {
         UnitArg::Auto => None,
         UnitArg::Fixed(u) => Some(u),
     };
-    let page = view::load(&a.input, a.clip.as_deref(), unit)?;
-    let out = a.output.unwrap_or_else(|| {
+    let out = a.output.clone().unwrap_or_else(|| {
         let stem = a.input.file_stem().unwrap_or(a.input.as_os_str());
         PathBuf::from(stem).with_extension("html")
     });
+    if is_clip(&a.input) || a.rig.is_some() {
+        let page = match (&a.clip, &a.rig) {
+            (None, _) => view::load_servo(&a.input, None)?,
+            (Some(clip), Some(rig)) => view::load_servo(
+                clip,
+                Some(ServoSource {
+                    bvh: &a.input,
+                    rig,
+                    unit,
+                }),
+            )?,
+            (Some(_), None) => {
+                return Err(format!(
+                    "{}: give the source BVH first (mocap view walk.bvh walk.mcb)",
+                    a.input.display()
+                )
+                .into())
+            }
+        };
+        write(&out, page.html.as_bytes())?;
+        eprintln!(
+            "wrote {} ({} bytes; {} servos × {} ticks; the playback loop changed the command at {} ticks)",
+            out.display(),
+            page.html.len(),
+            page.servos,
+            page.ticks,
+            page.shaped_ticks
+        );
+        if let Some(e) = page.max_error_us {
+            eprintln!("largest pulse difference, decoded against the source: {e:.2} µs");
+        }
+        return Ok(());
+    }
+    let page = view::load(&a.input, a.clip.as_deref(), unit)?;
     write(&out, page.html.as_bytes())?;
     eprintln!(
         "wrote {} ({} bytes; {} frames × {} joints, positions to {} mm)",

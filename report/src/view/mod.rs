@@ -10,8 +10,9 @@
 //! ([`mocap_encoder::metrics::compare`]). The data is packed as [`pack`]
 //! describes and embedded as JSON in a `<script type="application/json">`;
 //! the page's HTML, CSS and JavaScript are the files beside this one
-//! (`page.html`, `viewer.css`, `viewer.js`), compiled in: no server, no
-//! network.
+//! (`page.html`, `viewer.css`, `player.js` — the clock and controls —
+//! and `viewer.js`), compiled in: no server, no network. A servo clip gets
+//! its own page ([`servo`]: `servo.html`, `servo.js`).
 //!
 //! The page exposes its state on `<body>` for tests: `data-ready="1"` once
 //! drawn, `data-frame` (the frame shown), `data-playing`, `data-frames`,
@@ -20,6 +21,9 @@
 //! `&paused=1`, `&speed=2`, `&loop=0`, `&side=1` sets it on load.
 
 pub mod pack;
+pub mod servo;
+
+pub use servo::{load_servo, ServoPage, ServoSource};
 
 use std::path::{Path, PathBuf};
 
@@ -32,7 +36,9 @@ use serde::Serialize;
 
 const PAGE: &str = include_str!("page.html");
 const CSS: &str = include_str!("viewer.css");
-const JS: &str = include_str!("viewer.js");
+const JS: &str = concat!(include_str!("player.js"), include_str!("viewer.js"));
+const SERVO_PAGE: &str = include_str!("servo.html");
+const SERVO_JS: &str = concat!(include_str!("player.js"), include_str!("servo.js"));
 
 /// Why a view page could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -72,6 +78,34 @@ pub enum ViewError {
     NoFrames {
         /// The BVH file.
         path: PathBuf,
+    },
+    /// A servo clip (or a motion clip given as one) cannot be played.
+    #[error("{}: {source}", path.display())]
+    Servo {
+        /// The clip.
+        path: PathBuf,
+        /// Why.
+        source: mocap_encoder::play::PlayError,
+    },
+    /// A clip given as a servo clip is a motion clip.
+    #[error("{}: not a servo clip (give its source BVH first to view a motion clip)", path.display())]
+    NotServo {
+        /// The clip.
+        path: PathBuf,
+    },
+    /// The rig file does not read, or does not fit the source BVH (the
+    /// error names the file).
+    #[error(transparent)]
+    Rig(Box<mocap_encoder::rig::RigError>),
+    /// A servo clip is not an encoding of this rig and source.
+    #[error("{} does not play against {}: {what}", clip.display(), rig.display())]
+    ServoMismatch {
+        /// The clip.
+        clip: PathBuf,
+        /// The rig file.
+        rig: PathBuf,
+        /// What differs.
+        what: String,
     },
     /// A joint moves too far in one frame to pack (more than 3.2 km).
     #[error("{}: a joint moves more than 3.2 km between frames or from its decoded position", path.display())]
@@ -251,7 +285,7 @@ pub fn page(
         None => names.source.to_string(),
     };
     Ok(Page {
-        html: fill(&title, &json),
+        html: fill(PAGE, JS, &title, &json),
         frames,
         joints,
         quantum_mm: packed.quantum_mm,
@@ -259,26 +293,26 @@ pub fn page(
     })
 }
 
-/// The template with its title, style, data and script in place. In the
-/// JSON every `<` becomes `\u003c`, so no name in it can end the script
-/// element.
-fn fill(title: &str, json: &str) -> String {
+/// A page template (`page.html`, `servo.html`) with its title, the shared
+/// style, its data and its script in place. In the JSON every `<` becomes
+/// `\u003c`, so no name in it can end the script element.
+fn fill(page: &str, js: &str, title: &str, json: &str) -> String {
     let title = title
         .replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;");
     let json = json.replace('<', "\\u003c");
-    let mut out = String::with_capacity(PAGE.len() + CSS.len() + JS.len() + json.len());
-    let mut rest = PAGE;
+    let mut out = String::with_capacity(page.len() + CSS.len() + js.len() + json.len());
+    let mut rest = page;
     for (marker, value) in [
         ("{{TITLE}}", title.as_str()),
         ("{{CSS}}", CSS),
         ("{{DATA}}", json.as_str()),
-        ("{{JS}}", JS),
+        ("{{JS}}", js),
     ] {
         let (before, after) = rest
             .split_once(marker)
-            .unwrap_or_else(|| panic!("page.html lacks {marker} (in this order)"));
+            .unwrap_or_else(|| panic!("a page template lacks {marker} (in this order)"));
         out.push_str(before);
         out.push_str(value);
         rest = after;
@@ -293,13 +327,15 @@ mod tests {
 
     #[test]
     fn the_template_takes_every_part_once_and_escapes_names() {
-        let html = fill("a<b>&c", r#"{"name":"</script><!--"}"#);
-        assert!(html.contains("<title>a&lt;b&gt;&amp;c</title>"));
-        assert!(html.contains(r#"{"name":"\u003c/script>\u003c!--"}"#));
-        for marker in ["{{TITLE}}", "{{CSS}}", "{{DATA}}", "{{JS}}"] {
-            assert!(!html.contains(marker), "{marker}");
+        for (page, js) in [(PAGE, JS), (SERVO_PAGE, SERVO_JS)] {
+            let html = fill(page, js, "a<b>&c", r#"{"name":"</script><!--"}"#);
+            assert!(html.contains("<title>a&lt;b&gt;&amp;c</title>"));
+            assert!(html.contains(r#"{"name":"\u003c/script>\u003c!--"}"#));
+            for marker in ["{{TITLE}}", "{{CSS}}", "{{DATA}}", "{{JS}}"] {
+                assert!(!html.contains(marker), "{marker}");
+            }
+            assert_eq!(html.matches("</script>").count(), 2);
         }
-        assert_eq!(html.matches("</script>").count(), 2);
     }
 
     #[test]

@@ -1,10 +1,10 @@
 // mocap view: plays the motion embedded in the page (report/src/view/mod.rs
 // writes it; pack.rs says how it is packed) as a 3-D skeleton on a 2-D
-// canvas with a small perspective camera. No libraries, no network.
+// canvas with a small perspective camera; the clock and controls are
+// player.js. No libraries, no network.
 //
-// State for tests, on <body>: data-ready, data-frame, data-playing,
-// data-frames, data-worst, data-view (the 3-D view's x,y,w,h in CSS px). URL hash on load (and on change):
-// #frame=worst | #frame=N, &paused=1, &speed=S, &loop=0, &side=1.
+// State for tests, on <body> besides player.js's: data-worst, data-view (the
+// 3-D view's x,y,w,h in CSS px). URL hash besides player.js's: &side=1.
 "use strict";
 (function () {
   const D = JSON.parse(document.getElementById("motion").textContent);
@@ -83,17 +83,15 @@
     return (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10) * p;
   }
 
-  // ---- state ----
-  const S = {
-    frame: 0, t: 0, playing: true, speed: 1, loop: true, side: false, follow: true,
-    showOriginal: true, showDecoded: true,
+  // ---- view state (the clock is player.js's) ----
+  const V = {
+    side: false, follow: true, showOriginal: true, showDecoded: true,
     yaw: 0.6, pitch: 0.25, dist: size * 2.6,
   };
 
   // ---- elements ----
   const $ = (id) => document.getElementById(id);
-  const view = $("view"), strip = $("strip"), scrub = $("scrub");
-  const playBtn = $("play"), readout = $("readout");
+  const view = $("view"), strip = $("strip");
   const g = view.getContext("2d");
   const sg = strip.getContext("2d");
   $("title").textContent = D.clip ? D.source + " + " + D.clip : D.source;
@@ -111,9 +109,16 @@
       "per-frame joint error: bars max, line RMS (0–" + errScale.toFixed(1) +
       " mm); ▲ worst frame " + worst + "; click to jump";
   }
-  scrub.max = String(N - 1);
-  body.dataset.frames = String(N);
   if (hasClip) body.dataset.worst = String(worst);
+  const P = mocapPlayer({
+    frames: N, frameTime: D.frameTime, unit: "frame", worst: hasClip ? worst : null,
+    draw: () => draw(),
+    readout: (f) => (hasClip ? " · max " + frameMax[f].toFixed(2) + " mm" : ""),
+    hash: (h) => {
+      if (h.get("side") === "1") { V.side = true; $("side").checked = true; }
+    },
+  });
+  const S = P.S;
 
   // ---- camera ----
   let W = 0, H = 0, dpr = 1;
@@ -132,14 +137,14 @@
   }
   function target() {
     const f = S.frame;
-    if (S.follow) return [orig[f * J * 3], floor + size * 0.45, orig[f * J * 3 + 2]];
+    if (V.follow) return [orig[f * J * 3], floor + size * 0.45, orig[f * J * 3 + 2]];
     return [(lo[0] + hi[0]) / 2, floor + size * 0.45, (lo[2] + hi[2]) / 2];
   }
   function camera() {
     const t = target();
-    const cp = Math.cos(S.pitch), sp = Math.sin(S.pitch);
-    const dir = [cp * Math.sin(S.yaw), sp, cp * Math.cos(S.yaw)];
-    const eye = [t[0] + S.dist * dir[0], t[1] + S.dist * dir[1], t[2] + S.dist * dir[2]];
+    const cp = Math.cos(V.pitch), sp = Math.sin(V.pitch);
+    const dir = [cp * Math.sin(V.yaw), sp, cp * Math.cos(V.yaw)];
+    const eye = [t[0] + V.dist * dir[0], t[1] + V.dist * dir[1], t[2] + V.dist * dir[2]];
     const fwd = [-dir[0], -dir[1], -dir[2]];
     // right = fwd × (0, 1, 0); up = right × fwd
     let right = [-fwd[2], 0, fwd[0]];
@@ -236,12 +241,12 @@
     const c = camera();
     grid(c);
     const f = S.frame;
-    const off = S.side && hasClip ? size * 0.45 : 0;
+    const off = V.side && hasClip ? size * 0.45 : 0;
     const sl = [-c.right[0] * off, 0, -c.right[2] * off];
     const sr = [c.right[0] * off, 0, c.right[2] * off];
-    const width = hasClip && !S.side ? 5 : 3.5; // under the decoded one: wider
-    if (S.showOriginal || !hasClip) skeleton(c, orig, f, sl, () => COLOR_ORIGINAL, width);
-    if (hasClip && S.showDecoded) {
+    const width = hasClip && !V.side ? 5 : 3.5; // under the decoded one: wider
+    if (V.showOriginal || !hasClip) skeleton(c, orig, f, sl, () => COLOR_ORIGINAL, width);
+    if (hasClip && V.showDecoded) {
       skeleton(c, dec, f, sr, (j) => heat(err[f * J + j] / errScale), 2.5);
     }
     drawStrip();
@@ -276,67 +281,15 @@
     sg.fillStyle = "#111";
     sg.fillRect(x(S.frame) - dpr, 0, 2 * dpr, h);
   }
-  function show() {
-    const f = S.frame;
-    scrub.value = String(f);
-    const t = f * D.frameTime, total = (N - 1) * D.frameTime;
-    let s = "frame " + f + " / " + (N - 1) + " · " + t.toFixed(3) + " s / " + total.toFixed(3) + " s";
-    if (hasClip) s += " · max " + frameMax[f].toFixed(2) + " mm";
-    readout.textContent = s;
-    playBtn.textContent = S.playing ? "Pause" : "Play";
-    body.dataset.frame = String(f);
-    body.dataset.playing = S.playing ? "1" : "0";
-    draw();
-  }
-  function setFrame(f) {
-    S.frame = Math.min(N - 1, Math.max(0, Math.round(f)));
-    S.t = S.frame * D.frameTime;
-    show();
-  }
-
-  // ---- playback: a timer, so it follows the page's clock (also a headless
-  // browser's virtual time) ----
-  let last = null;
-  function tick() {
-    const now = performance.now();
-    if (S.playing && last != null) {
-      S.t += ((now - last) / 1000) * S.speed;
-      let f = Math.floor(S.t / D.frameTime + 1e-9);
-      if (f >= N) {
-        if (S.loop && N > 1) {
-          S.t = S.t % (N * D.frameTime);
-          f = Math.floor(S.t / D.frameTime + 1e-9);
-        } else {
-          f = N - 1;
-          S.playing = false;
-        }
-      }
-      if (f !== S.frame || !S.playing) {
-        S.frame = Math.min(N - 1, f);
-        show();
-      }
-    }
-    last = now;
-    setTimeout(tick, 1000 / 60);
-  }
-
   // ---- input ----
-  playBtn.onclick = () => {
-    if (!S.playing && S.frame >= N - 1 && !S.loop) setFrame(0);
-    S.playing = !S.playing;
-    show();
-  };
-  scrub.oninput = () => setFrame(Number(scrub.value));
-  $("loop").onchange = (e) => { S.loop = e.target.checked; };
-  $("speed").onchange = (e) => { S.speed = Number(e.target.value); };
-  $("follow").onchange = (e) => { S.follow = e.target.checked; draw(); };
-  $("showOriginal").onchange = (e) => { S.showOriginal = e.target.checked; draw(); };
-  $("showDecoded").onchange = (e) => { S.showDecoded = e.target.checked; draw(); };
-  $("side").onchange = (e) => { S.side = e.target.checked; draw(); };
-  $("worst").onclick = () => { S.playing = false; setFrame(worst); };
+  $("follow").onchange = (e) => { V.follow = e.target.checked; draw(); };
+  $("showOriginal").onchange = (e) => { V.showOriginal = e.target.checked; draw(); };
+  $("showDecoded").onchange = (e) => { V.showDecoded = e.target.checked; draw(); };
+  $("side").onchange = (e) => { V.side = e.target.checked; draw(); };
+  $("worst").onclick = () => P.pauseAt(worst);
   strip.onclick = (e) => {
     const r = strip.getBoundingClientRect();
-    setFrame(Math.floor(((e.clientX - r.left) / r.width) * N));
+    P.setFrame(Math.floor(((e.clientX - r.left) / r.width) * N));
   };
   let drag = null;
   view.onpointerdown = (e) => {
@@ -346,43 +299,18 @@
   };
   view.onpointermove = (e) => {
     if (!drag) return;
-    S.yaw -= (e.clientX - drag[0]) * 0.01;
-    S.pitch = Math.min(1.45, Math.max(-0.2, S.pitch + (e.clientY - drag[1]) * 0.01));
+    V.yaw -= (e.clientX - drag[0]) * 0.01;
+    V.pitch = Math.min(1.45, Math.max(-0.2, V.pitch + (e.clientY - drag[1]) * 0.01));
     drag = [e.clientX, e.clientY];
     draw();
   };
   view.onpointerup = () => { drag = null; view.classList.remove("dragging"); };
   view.onwheel = (e) => {
     e.preventDefault();
-    S.dist = Math.min(size * 40, Math.max(size * 0.3, S.dist * Math.exp(e.deltaY * 0.001)));
+    V.dist = Math.min(size * 40, Math.max(size * 0.3, V.dist * Math.exp(e.deltaY * 0.001)));
     draw();
   };
-  window.onkeydown = (e) => {
-    if (e.target.tagName === "INPUT" && e.target.type === "range") return;
-    if (e.key === " ") { e.preventDefault(); playBtn.onclick(); }
-    else if (e.key === "ArrowRight") { S.playing = false; setFrame(S.frame + 1); }
-    else if (e.key === "ArrowLeft") { S.playing = false; setFrame(S.frame - 1); }
-  };
-
-  // ---- URL hash ----
-  function applyHash() {
-    const h = new URLSearchParams(location.hash.replace(/^#/, ""));
-    const fr = h.get("frame");
-    if (fr === "worst") setFrame(worst);
-    else if (fr != null && fr !== "" && !isNaN(Number(fr))) setFrame(Number(fr));
-    if (h.get("paused") === "1") S.playing = false;
-    if (h.get("speed")) {
-      S.speed = Number(h.get("speed")) || 1;
-      $("speed").value = String(S.speed);
-    }
-    if (h.get("loop") === "0") { S.loop = false; $("loop").checked = false; }
-    if (h.get("side") === "1") { S.side = true; $("side").checked = true; }
-    show();
-  }
-  window.onhashchange = applyHash;
   window.onresize = resize;
   resize();
-  applyHash();
-  body.dataset.ready = "1";
-  tick();
+  P.start();
 })();
