@@ -87,6 +87,27 @@ fn edited_demo(dir: &Path, name: &str, edit: impl Fn(&str) -> String) -> PathBuf
     p
 }
 
+/// `mocap encode --rig assets/rigs/animatronic_demo.toml --max-error 0.5deg`
+/// of the demo, written to `dir/servo.mcb`.
+fn demo_servo_clip(dir: &Path) -> PathBuf {
+    let demo = root().join("assets/animatronic_demo.bvh");
+    let rig = root().join("assets/rigs/animatronic_demo.toml");
+    let servo = dir.join("servo.mcb");
+    let args = [
+        "encode",
+        "--rig",
+        s(&rig),
+        "--max-error",
+        "0.5deg",
+        s(&demo),
+        "-o",
+        s(&servo),
+    ];
+    let o = mocap_in(dir, &args);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    servo
+}
+
 #[test]
 fn view_refuses_what_does_not_belong_together() {
     let d = out_dir("view-errors");
@@ -158,23 +179,10 @@ fn view_refuses_what_does_not_belong_together() {
     );
 
     // A servo clip of the demo.
-    let demo = root().join("assets/animatronic_demo.bvh");
-    let rig = root().join("assets/rigs/animatronic_demo.toml");
-    let servo = d.join("servo.mcb");
-    let o = mocap_in(
-        &d,
-        &[
-            "encode",
-            "--rig",
-            s(&rig),
-            "--max-error",
-            "0.5deg",
-            s(&demo),
-            "-o",
-            s(&servo),
-        ],
+    let (demo, servo) = (
+        root().join("assets/animatronic_demo.bvh"),
+        demo_servo_clip(&d),
     );
-    assert!(o.status.success(), "{}", text(&o.stderr));
     expect_error(
         &["view", s(&demo), s(&servo), "-o", "x.html"],
         &format!(
@@ -204,21 +212,7 @@ fn view_a_servo_clip_alone_and_with_its_source() {
     let demo = root().join("assets/animatronic_demo.bvh");
     let rig = root().join("assets/rigs/animatronic_demo.toml");
     let wide = root().join("assets/rigs/animatronic_demo_wide.toml");
-    let servo = d.join("servo.mcb");
-    let o = mocap_in(
-        &d,
-        &[
-            "encode",
-            "--rig",
-            s(&rig),
-            "--max-error",
-            "0.5deg",
-            s(&demo),
-            "-o",
-            s(&servo),
-        ],
-    );
-    assert!(o.status.success(), "{}", text(&o.stderr));
+    let servo = demo_servo_clip(&d);
 
     // Alone: the clip's own rig table; default name from the clip.
     let o = mocap_in(&d, &["view", s(&servo)]);
@@ -230,36 +224,20 @@ fn view_a_servo_clip_alone_and_with_its_source() {
     assert!(page.contains(r#""kind":"servo""#) && page.contains(r#""sourcePulses":null"#));
 
     // With its source and rig: the rig's names and signals.
-    let o = mocap_in(
-        &d,
-        &[
-            "view",
-            s(&demo),
-            s(&servo),
-            "--rig",
-            s(&rig),
-            "-o",
-            "with.html",
-        ],
-    );
+    let with_rig = |rig: &Path, out: &str| {
+        mocap_in(
+            &d,
+            &["view", s(&demo), s(&servo), "--rig", s(rig), "-o", out],
+        )
+    };
+    let o = with_rig(&rig, "with.html");
     assert!(o.status.success(), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("largest pulse difference, decoded against the source: "));
     let page = std::fs::read_to_string(d.join("with.html")).expect("page");
     assert!(page.contains(r#""name":"torso_twist""#) && page.contains(r#""sourcePulses":[["#));
 
     // Another rig (same servos, wider ranges): refused by the clip's rig digest.
-    let o = mocap_in(
-        &d,
-        &[
-            "view",
-            s(&demo),
-            s(&servo),
-            "--rig",
-            s(&wide),
-            "-o",
-            "x.html",
-        ],
-    );
+    let o = with_rig(&wide, "x.html");
     assert!(!o.status.success());
     assert_eq!(
         text(&o.stderr),

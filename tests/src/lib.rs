@@ -247,6 +247,19 @@ pub fn servo_demo_clip_for(
     (path, bytes)
 }
 
+/// `m` encoded with the `index` codec at 1° (the encoder's default), its
+/// unit detected: the clip's bytes.
+pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
+    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    let opts = EncodeOptions {
+        codec: CodecChoice::Index,
+        bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
+        metres_per_unit: mocap_encoder::units::detect(m).metres(),
+        key_interval: None,
+    };
+    encode::encode(m, &opts).unwrap().bytes
+}
+
 /// The headless browser of the page tests (`mocap view`): Debian's
 /// `chromium`, or `$MOCAP_CHROMIUM`. Without it a test prints SKIPPED and
 /// returns (`None`), except under `CI`, where a missing browser fails it.

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 
 use mocap_report::view::{self, ServoSource};
 use mocap_tests::{
-    body_data, browse, chromium, corpus_file, servo_demo_clip, workspace_root, BrowserOutput,
-    DEMO_RIG,
+    body_data, browse, chromium, corpus_file, encode_index_1deg, servo_demo_clip, workspace_root,
+    BrowserOutput, DEMO_RIG,
 };
 
 fn out_dir() -> PathBuf {
@@ -68,6 +68,12 @@ fn view_rect(dom: &str) -> [u32; 4] {
     [v[0], v[1] + 70, v[2] - 220, v[3] - 70]
 }
 
+/// The frames shown after 0.4 s and 1.6 s of playing from frame 0.
+fn played(browser: &Path, html: &Path) -> (usize, usize) {
+    let at = |ms| frame_of(&browse(browser, html, "frame=0", ms, BrowserOutput::Dom));
+    (at(400), at(1600))
+}
+
 /// The page's blue of the original skeleton (viewer.js `COLOR_ORIGINAL`).
 const ORIGINAL: [u8; 3] = [0x3b, 0x6f, 0xc4];
 
@@ -98,14 +104,7 @@ fn demo_page_plays_and_scrubs_in_chromium() {
     let rect = view_rect(&dom);
 
     // Playing: the frame follows the clock (60 Hz demo, 8 s: no wrap).
-    let early = frame_of(&browse(&browser, &html, "frame=0", 400, BrowserOutput::Dom));
-    let late = frame_of(&browse(
-        &browser,
-        &html,
-        "frame=0",
-        1600,
-        BrowserOutput::Dom,
-    ));
+    let (early, late) = played(&browser, &html);
     assert!(
         0 < early && early < late && late < page.frames,
         "frames {early} then {late} of {}",
@@ -170,21 +169,10 @@ fn corpus_clip_page_in_chromium() {
     let Some(browser) = chromium() else {
         return;
     };
-    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
     let m = mocap_encoder::bvh::read_file(&bvh).unwrap();
-    let unit = mocap_encoder::units::detect(&m);
-    let enc = encode::encode(
-        &m,
-        &EncodeOptions {
-            codec: CodecChoice::Index,
-            bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
-            metres_per_unit: unit.metres(),
-            key_interval: None,
-        },
-    )
-    .unwrap();
+    let enc = encode_index_1deg(&m);
     let clip = out_dir().join("05_04.mcb");
-    std::fs::write(&clip, &enc.bytes).unwrap();
+    std::fs::write(&clip, &enc).unwrap();
     let page = view::load(&bvh, Some(&clip), None).unwrap();
     let x = page.metrics.as_ref().unwrap();
     eprintln!(
@@ -267,14 +255,7 @@ fn servo_clip_page_in_chromium() {
         Some(page.shaped_ticks.to_string())
     );
     assert_eq!(frame_of(&dom), 100);
-    let early = frame_of(&browse(&browser, &html, "frame=0", 400, BrowserOutput::Dom));
-    let late = frame_of(&browse(
-        &browser,
-        &html,
-        "frame=0",
-        1600,
-        BrowserOutput::Dom,
-    ));
+    let (early, late) = played(&browser, &html);
     assert!(0 < early && early < late, "ticks {early} then {late}");
 
     // The curves drawn: the decoded blue and the commanded orange.

@@ -10,8 +10,8 @@
 //! ([`mocap_encoder::metrics::compare`]). The data is packed as [`pack`]
 //! describes and embedded as JSON in a `<script type="application/json">`;
 //! the page's HTML, CSS and JavaScript are the files beside this one
-//! (`page.html`, `viewer.css`, `player.js` — the clock and controls —
-//! and `viewer.js`), compiled in: no server, no network. A servo clip gets
+//! (`page.html`, `viewer.css`, `controls.html` and `player.js` — the
+//! playback controls and clock — and `viewer.js`), compiled in: no server, no network. A servo clip gets
 //! its own page ([`servo`]: `servo.html`, `servo.js`).
 //!
 //! The page exposes its state on `<body>` for tests: `data-ready="1"` once
@@ -36,6 +36,7 @@ use serde::Serialize;
 
 const PAGE: &str = include_str!("page.html");
 const CSS: &str = include_str!("viewer.css");
+const CONTROLS: &str = include_str!("controls.html");
 const JS: &str = concat!(include_str!("player.js"), include_str!("viewer.js"));
 const SERVO_PAGE: &str = include_str!("servo.html");
 const SERVO_JS: &str = concat!(include_str!("player.js"), include_str!("servo.js"));
@@ -294,7 +295,8 @@ pub fn page(
 }
 
 /// A page template (`page.html`, `servo.html`) with its title, the shared
-/// style, its data and its script in place. In the JSON every `<` becomes
+/// style and playback controls (`controls.html`, driven by `player.js`), its
+/// data and its script in place. In the JSON every `<` becomes
 /// `\u003c`, so no name in it can end the script element.
 fn fill(page: &str, js: &str, title: &str, json: &str) -> String {
     let title = title
@@ -307,6 +309,7 @@ fn fill(page: &str, js: &str, title: &str, json: &str) -> String {
     for (marker, value) in [
         ("{{TITLE}}", title.as_str()),
         ("{{CSS}}", CSS),
+        ("{{CONTROLS}}", CONTROLS),
         ("{{DATA}}", json.as_str()),
         ("{{JS}}", js),
     ] {
@@ -331,7 +334,7 @@ mod tests {
             let html = fill(page, js, "a<b>&c", r#"{"name":"</script><!--"}"#);
             assert!(html.contains("<title>a&lt;b&gt;&amp;c</title>"));
             assert!(html.contains(r#"{"name":"\u003c/script>\u003c!--"}"#));
-            for marker in ["{{TITLE}}", "{{CSS}}", "{{DATA}}", "{{JS}}"] {
+            for marker in ["{{TITLE}}", "{{CSS}}", "{{CONTROLS}}", "{{DATA}}", "{{JS}}"] {
                 assert!(!html.contains(marker), "{marker}");
             }
             assert_eq!(html.matches("</script>").count(), 2);
