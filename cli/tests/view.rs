@@ -259,3 +259,25 @@ fn view_a_servo_clip_alone_and_with_its_source() {
     );
     assert!(!d.join("x.html").exists(), "a page was written");
 }
+
+#[test]
+fn view_a_show() {
+    let d = out_dir("view-show");
+    let show = root().join("firmware-example/clips/demo_show.mcb");
+    let cues = root().join("assets/shows/demo_cues.txt");
+    let o = mocap_in(&d, &["view", s(&show), "--cues", s(&cues)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(err.starts_with("wrote demo_show.html ("), "{err}");
+    assert!(err.contains("12 servos × "), "{err}");
+    let page = std::fs::read_to_string(d.join("demo_show.html")).expect("page");
+    assert!(page.contains(r#""kind":"show""#) && page.contains(r#""name":"greet""#));
+    // A show with a clip beside it.
+    let clip = root().join("firmware-example/clips/demo.mcb");
+    let o = mocap_in(&d, &["view", s(&show), s(&clip), "-o", "x.html"]);
+    assert_eq!(
+        text(&o.stderr),
+        format!("mocap: error: {}: a show is viewed alone\n", s(&show))
+    );
+    assert!(!d.join("x.html").exists());
+}

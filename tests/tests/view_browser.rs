@@ -1,13 +1,15 @@
 //! `mocap view` pages opened in a real browser (headless Chromium): the
-//! shipped demo with its clip, a corpus clip with its encoding, and the
-//! demo's servo clip. The page must draw the skeletons (or the servo
-//! curves), play (its frame readout advances with the browser's virtual
+//! shipped demo with its clip, a corpus clip with its encoding, the demo's
+//! servo clip and the demo show. The page must draw the skeletons (or the
+//! servo curves), play (its frame readout advances with the browser's virtual
 //! time), and scrub to the worst-error frame the Rust side computed
 //! (`mocap eval`'s). Without Chromium the tests print SKIPPED
 //! (under `CI` they fail); screenshots are kept in `target/view-browser/`.
 
 use std::path::{Path, PathBuf};
 
+use mocap_encoder::play::Protocol;
+use mocap_encoder::show::play::{show_stream, Script};
 use mocap_report::view::{self, ServoSource};
 use mocap_tests::{
     body_data, browse, chromium, corpus_file, encode_index_1deg, servo_demo_clip, workspace_root,
@@ -273,4 +275,47 @@ fn servo_clip_page_in_chromium() {
     eprintln!("servo page: {blue} decoded pixels, {orange} commanded pixels");
     assert!(blue > 2000, "decoded curves not drawn: {blue} pixels");
     assert!(orange > 500, "commanded curves not drawn: {orange} pixels");
+}
+
+#[test]
+fn show_page_in_chromium() {
+    let Some(browser) = chromium() else {
+        return;
+    };
+    let root = workspace_root();
+    let show_path = root.join("firmware-example/clips/demo_show.mcb");
+    let cues = root.join("assets/shows/demo_cues.txt");
+    let page = view::load_show(&show_path, Some(&cues), Some(&root.join(DEMO_RIG)), 60.0).unwrap();
+    // What the show player played, straight from the library.
+    let bytes = std::fs::read(&show_path).unwrap();
+    let show = mocap_decoder::Show::parse(&bytes).unwrap();
+    let text = std::fs::read_to_string(&cues).unwrap();
+    let script = Script::parse(&text, "demo_cues.txt", &show).unwrap();
+    let played = show_stream(&show, &script, Protocol::Maestro, None, None, 60.0).unwrap();
+    assert_eq!(page.ticks, played.timeline.len());
+    assert_eq!(page.servos, 12);
+    let html = out_dir().join("show.html");
+    std::fs::write(&html, &page.html).unwrap();
+
+    // At a few ticks the page names the clip the show player played.
+    for tick in [10, page.ticks / 3, page.ticks - 5] {
+        let expected = played.timeline[tick]
+            .clip
+            .map(|k| show.entry(k).unwrap().name.to_string())
+            .unwrap_or_default();
+        let hash = format!("frame={tick}&paused=1");
+        let dom = browse(&browser, &html, &hash, 500, BrowserOutput::Dom);
+        assert_eq!(frame_of(&dom), tick);
+        assert_eq!(body_data(&dom, "clip"), Some(expected), "tick {tick}");
+    }
+    let shot = out_dir().join("show.png");
+    browse(
+        &browser,
+        &html,
+        "frame=200&paused=1",
+        500,
+        BrowserOutput::Screenshot(&shot),
+    );
+    let (blue, _) = count_pixels(&shot, [150, 150, 1000, 600], ORIGINAL);
+    assert!(blue > 2000, "curves not drawn: {blue} pixels");
 }

@@ -1,6 +1,7 @@
 //! `mocap view`: one self-contained HTML page that plays a BVH as a 3-D
 //! skeleton, with its decoded `.mcb` clip overlaid and coloured by error,
-//! or a servo clip's pulse curves against its limits (`mocap_report::view`).
+//! or a servo clip's (or a show's) pulse curves against its limits
+//! (`mocap_report::view`).
 
 use std::path::{Path, PathBuf};
 
@@ -10,7 +11,7 @@ use super::{write, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The source BVH, or a servo clip (`.mcb`) to view alone.
+    /// The source BVH, or a servo clip or show (`.mcb`) to view alone.
     input: PathBuf,
     /// The BVH's `.mcb` clip: a motion clip, shown decoded beside it, or a
     /// servo clip (with `--rig`), its curves beside the rig's signals.
@@ -21,9 +22,17 @@ pub struct Args {
     /// Length unit of the input.
     #[arg(long, default_value = "auto")]
     units: UnitArg,
-    /// The rig file a servo clip was encoded with (its source BVH first).
-    #[arg(long, requires = "clip")]
+    /// The rig file a servo clip was encoded with (its source BVH first),
+    /// or the rig a motion show plays through.
+    #[arg(long)]
     rig: Option<PathBuf>,
+    /// A show: the command script to run it with (as `mocap play --cues`;
+    /// without one, its first cue list runs, or its first clip plays).
+    #[arg(long)]
+    cues: Option<PathBuf>,
+    /// A show: the most seconds it plays when its script has no `end`.
+    #[arg(long, default_value_t = 60.0)]
+    duration: f64,
 }
 
 fn is_clip(p: &Path) -> bool {
@@ -39,17 +48,27 @@ pub fn run(a: Args) -> super::Result {
         let stem = a.input.file_stem().unwrap_or(a.input.as_os_str());
         PathBuf::from(stem).with_extension("html")
     });
-    if is_clip(&a.input) || a.rig.is_some() {
-        let page = match (&a.clip, &a.rig) {
-            (None, _) => view::load_servo(&a.input, None)?,
-            (Some(clip), Some(rig)) => view::load_servo(
-                clip,
-                Some(ServoSource {
+    let is_show = is_clip(&a.input)
+        && std::fs::read(&a.input).is_ok_and(|b| mocap_decoder::Show::parse(&b).is_ok());
+    if is_show || is_clip(&a.input) || a.rig.is_some() || a.cues.is_some() {
+        let (page, what) = match (&a.clip, &a.rig) {
+            _ if is_show || a.cues.is_some() => {
+                if a.clip.is_some() {
+                    return Err(format!("{}: a show is viewed alone", a.input.display()).into());
+                }
+                let page =
+                    view::load_show(&a.input, a.cues.as_deref(), a.rig.as_deref(), a.duration)?;
+                (page, "ticks of the show")
+            }
+            (None, _) => (view::load_servo(&a.input, None)?, "ticks"),
+            (Some(clip), Some(rig)) => {
+                let source = ServoSource {
                     bvh: &a.input,
                     rig,
                     unit,
-                }),
-            )?,
+                };
+                (view::load_servo(clip, Some(source))?, "ticks")
+            }
             (Some(_), None) => {
                 return Err(format!(
                     "{}: give the source BVH first (mocap view walk.bvh walk.mcb)",
@@ -60,7 +79,7 @@ pub fn run(a: Args) -> super::Result {
         };
         write(&out, page.html.as_bytes())?;
         eprintln!(
-            "wrote {} ({} bytes; {} servos × {} ticks; the playback loop changed the command at {} ticks)",
+            "wrote {} ({} bytes; {} servos × {} {what}; the playback loop changed the command at {} ticks)",
             out.display(),
             page.html.len(),
             page.servos,

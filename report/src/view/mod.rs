@@ -23,7 +23,7 @@
 pub mod pack;
 pub mod servo;
 
-pub use servo::{load_servo, ServoPage, ServoSource};
+pub use servo::{load_servo, load_show, ServoPage, ServoSource};
 
 use std::path::{Path, PathBuf};
 
@@ -98,6 +98,10 @@ pub enum ViewError {
     /// error names the file).
     #[error(transparent)]
     Rig(Box<mocap_encoder::rig::RigError>),
+    /// A show's command script does not parse (the error names the file
+    /// and line).
+    #[error(transparent)]
+    Script(mocap_encoder::located::LocatedError),
     /// A servo clip is not an encoding of this rig and source.
     #[error("{} does not play against {}: {what}", clip.display(), rig.display())]
     ServoMismatch {

@@ -4,7 +4,8 @@
 // No libraries, no network.
 //
 // State for tests, on <body> besides player.js's: data-shaped (ticks at
-// which the playback loop changed a command).
+// which the playback loop changed a command); a show: data-clip (the clip
+// playing at the tick shown).
 "use strict";
 (function () {
   const D = JSON.parse(document.getElementById("motion").textContent);
@@ -21,6 +22,16 @@
 
   const $ = (id) => document.getElementById(id);
   const canvas = $("rows"), g = canvas.getContext("2d");
+  const band = $("band"), bg = band.getContext("2d");
+  const SH = D.show;
+  // Clip colours of the show band (clip index mod length).
+  const CLIP_COLORS = ["#8fb3e0", "#a6d49f", "#e6c27a", "#c9a3d9", "#8fd1cc", "#e7a3a3", "#b8b8b8"];
+  if (SH) {
+    body.classList.add("show");
+    $("show-clips").textContent =
+      "clips: " + SH.clips.map((c) => c.name + " " + c.seconds.toFixed(2) + " s" + (c.loops ? " (loops)" : "")).join(" · ") +
+      " — band: the clip playing, transitions hatched red; ▼ the script's commands and the cues' events";
+  }
   $("title").textContent = D.source ? D.source + " + " + D.clip + " (" + D.rig + ")" : D.clip;
   if (!D.sourcePulses) body.classList.add("no-source");
   $("summary").textContent =
@@ -32,10 +43,17 @@
     for (let s = 0; s < n; s++) if (D.decoded[s][f] !== D.commanded[s][f]) k++;
     return k;
   };
+  // A show: the clip and state at tick f (also data-clip on <body>).
+  const playing = (f) => {
+    const seg = SH.segments.find((g) => g.from <= f && f < g.to);
+    const what = seg && seg.clip != null ? SH.clips[seg.clip].name : "";
+    body.dataset.clip = what;
+    return seg ? (what || "no clip") + " " + seg.state : "";
+  };
   const P = mocapPlayer({
     frames: N, frameTime: dt, unit: "tick", worst: null,
     draw: () => draw(),
-    readout: (f) => " · " + changedAt(f) + " servos changed by the loop",
+    readout: (f) => " · " + changedAt(f) + " servos changed by the loop" + (SH ? " · " + playing(f) : ""),
   });
   const S = P.S;
   let W = 0, dpr = 1;
@@ -47,7 +65,59 @@
     canvas.style.height = n * ROW + "px";
     canvas.width = W;
     canvas.height = Math.round(n * ROW * dpr);
+    if (SH) {
+      band.width = W;
+      band.height = Math.round(band.getBoundingClientRect().height * dpr);
+    }
     draw();
+  }
+  // The show band: one box per run of ticks with one clip in one state,
+  // transitions hatched, the script's commands and the events as marks.
+  function drawBand(w, x) {
+    const h = band.height / dpr;
+    bg.setTransform(dpr, 0, 0, dpr, 0, 0);
+    bg.clearRect(0, 0, w, h);
+    bg.font = "11px system-ui, sans-serif";
+    bg.fillStyle = COLORS.text;
+    bg.fillText("show", 8, 30);
+    const top = 16, bh = h - 22;
+    for (const seg of SH.segments) {
+      const x0 = x(seg.from - 0.5), x1 = x(seg.to - 0.5);
+      if (seg.clip == null) continue;
+      bg.fillStyle = CLIP_COLORS[seg.clip % CLIP_COLORS.length];
+      bg.fillRect(x0, top, x1 - x0, bh);
+      if (seg.state === "blending") {
+        bg.save();
+        bg.beginPath();
+        bg.rect(x0, top, x1 - x0, bh);
+        bg.clip();
+        bg.strokeStyle = "#b00020";
+        bg.lineWidth = 1.5;
+        for (let k = x0 - bh; k < x1; k += 6) {
+          bg.beginPath();
+          bg.moveTo(k, top + bh);
+          bg.lineTo(k + bh, top);
+          bg.stroke();
+        }
+        bg.restore();
+      }
+      const label = SH.clips[seg.clip].name + (seg.state === "playing" ? "" : " (" + seg.state + ")");
+      if (bg.measureText(label).width + 6 < x1 - x0) {
+        bg.fillStyle = "#222";
+        bg.fillText(label, x0 + 3, top + bh / 2 + 4);
+      }
+    }
+    bg.fillStyle = COLORS.shaped;
+    for (const [t] of SH.cues) {
+      const cx = x(t);
+      bg.beginPath();
+      bg.moveTo(cx - 4, 2);
+      bg.lineTo(cx + 4, 2);
+      bg.lineTo(cx, 12);
+      bg.fill();
+    }
+    bg.fillStyle = COLORS.cursor;
+    bg.fillRect(x(S.frame) - 0.75, 0, 1.5, h);
   }
   function draw() {
     if (!W) return;
@@ -55,6 +125,7 @@
     const w = W / dpr;
     g.clearRect(0, 0, w, n * ROW);
     const x = (t) => LEFT + ((t + 0.5) / Math.max(1, N)) * (w - LEFT - 12);
+    if (SH) drawBand(w, x);
     for (let s = 0; s < n; s++) {
       const info = D.servos[s];
       const top = s * ROW + 6, h = ROW - 14;
