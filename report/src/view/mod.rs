@@ -74,11 +74,11 @@ pub enum ViewError {
         /// What differs.
         source: SourceMismatch,
     },
-    /// The motion has no frames.
-    #[error("{}: no frames to show", path.display())]
+    /// The motion has no frames or no joints.
+    #[error("{name}: no frames to show")]
     NoFrames {
-        /// The BVH file.
-        path: PathBuf,
+        /// The source's name.
+        name: String,
     },
     /// A servo clip (or a motion clip given as one) cannot be played.
     #[error("{}: {source}", path.display())]
@@ -113,10 +113,10 @@ pub enum ViewError {
         what: String,
     },
     /// A joint moves too far in one frame to pack (more than 3.2 km).
-    #[error("{}: a joint moves more than 3.2 km between frames or from its decoded position", path.display())]
+    #[error("{name}: a joint moves more than 3.2 km between frames or from its decoded position")]
     TooFar {
-        /// The BVH file.
-        path: PathBuf,
+        /// The source's name.
+        name: String,
     },
 }
 
@@ -199,15 +199,7 @@ pub fn load(bvh: &Path, clip: Option<&Path>, unit: Option<LengthUnit>) -> Result
         clip: clip_name.as_deref(),
         source_bytes,
     };
-    page(&m, unit, decoded.as_ref().map(|(b, n)| (b, *n)), &names).map_err(|e| match e {
-        ViewError::NoFrames { .. } => ViewError::NoFrames {
-            path: bvh.to_path_buf(),
-        },
-        ViewError::TooFar { .. } => ViewError::TooFar {
-            path: bvh.to_path_buf(),
-        },
-        other => other,
-    })
+    page(&m, unit, decoded.as_ref().map(|(b, n)| (b, *n)), &names)
 }
 
 fn file_name(p: &Path) -> String {
@@ -231,8 +223,8 @@ pub struct Names<'a> {
 
 /// The page of `original` (lengths in `unit`) and, optionally, its decoded
 /// version with the clip's size in bytes (same skeleton and frames, as
-/// [`clipfile::decode_against`] returns it). Errors name no file (see
-/// [`load`]).
+/// [`clipfile::decode_against`] returns it). Errors name the source by
+/// `names.source`.
 pub fn page(
     original: &Motion,
     unit: LengthUnit,
@@ -241,15 +233,15 @@ pub fn page(
 ) -> Result<Page, ViewError> {
     let frames = original.frames();
     let joints = original.skeleton.joints.len();
-    let no_file = PathBuf::new;
+    let name = || names.source.to_string();
     if frames == 0 || joints == 0 {
-        return Err(ViewError::NoFrames { path: no_file() });
+        return Err(ViewError::NoFrames { name: name() });
     }
     let mpu = unit.metres();
     let a = metrics::positions_mm(original, mpu);
     let b = decoded.map(|(d, _)| metrics::positions_mm(d, mpu));
     let packed = pack::pack_positions(&a, b.as_deref(), joints)
-        .ok_or_else(|| ViewError::TooFar { path: no_file() })?;
+        .ok_or_else(|| ViewError::TooFar { name: name() })?;
     let errors: Option<Vec<f64>> = b.as_ref().map(|b| {
         a.iter()
             .zip(b)
