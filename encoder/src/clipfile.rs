@@ -215,3 +215,54 @@ pub fn decode_against(
         metres_per_unit,
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    use crate::{generate, units};
+
+    #[test]
+    fn a_clip_plays_against_its_source_and_not_another() {
+        let m = generate::animatronic_demo();
+        let metres = units::detect(&m).metres();
+        let opts = EncodeOptions {
+            codec: CodecChoice::Index,
+            bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
+            metres_per_unit: metres,
+            key_interval: None,
+        };
+        let bytes = encode::encode(&m, &opts).unwrap().bytes;
+        let clip = Clip::parse(&bytes).unwrap();
+        let back = decode_against(&clip, &m, metres).unwrap();
+        assert_eq!((back.frames(), back.channels()), (m.frames(), m.channels()));
+
+        let mut short = m.clone();
+        short.values.truncate(100 * m.channels());
+        assert!(matches!(
+            decode_against(&clip, &short, metres),
+            Err(SourceMismatch::Shape { clip_frames, frames: 100, .. }) if clip_frames == m.frames()
+        ));
+        let mut longer = m.clone();
+        longer.skeleton.joints[2].offset[1] += 1.0;
+        let e = decode_against(&clip, &longer, metres).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                SourceMismatch::Skeleton {
+                    index: 2,
+                    what: "offset",
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let mut renamed = m.clone();
+        renamed.skeleton.joints[3].name = "Other".into();
+        let e = decode_against(&clip, &renamed, metres).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "its skeleton differs from the source's at joint 3 (Other): name"
+        );
+    }
+}
