@@ -76,6 +76,23 @@
     }
   }
   const size = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1);
+  // Each frame's centre on the ground (mean of its joints' x and z), which
+  // the camera follows (the root of some rigs stays put while the hips move),
+  // and the middle of all of them.
+  const centre = new Float32Array(N * 2);
+  let cx0 = Infinity, cx1 = -Infinity, cz0 = Infinity, cz1 = -Infinity;
+  for (let f = 0; f < N; f++) {
+    let sx = 0, sz = 0;
+    for (let j = 0; j < J; j++) {
+      sx += orig[(f * J + j) * 3];
+      sz += orig[(f * J + j) * 3 + 2];
+    }
+    const x = sx / J, z = sz / J;
+    centre[f * 2] = x;
+    centre[f * 2 + 1] = z;
+    cx0 = Math.min(cx0, x); cx1 = Math.max(cx1, x);
+    cz0 = Math.min(cz0, z); cz1 = Math.max(cz1, z);
+  }
   const gridStep = niceStep(size / 3);
   function niceStep(x) {
     const p = Math.pow(10, Math.floor(Math.log10(x)));
@@ -137,8 +154,8 @@
   }
   function target() {
     const f = S.frame;
-    if (V.follow) return [orig[f * J * 3], floor + size * 0.45, orig[f * J * 3 + 2]];
-    return [(lo[0] + hi[0]) / 2, floor + size * 0.45, (lo[2] + hi[2]) / 2];
+    if (V.follow) return [centre[f * 2], floor + size * 0.45, centre[f * 2 + 1]];
+    return [(cx0 + cx1) / 2, floor + size * 0.45, (cz0 + cz1) / 2];
   }
   function camera() {
     const t = target();
