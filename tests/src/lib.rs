@@ -312,7 +312,16 @@ pub fn browse(
         std::thread::current().id()
     ));
     let page = page.canonicalize().expect("page exists");
-    let url = format!("file://{}#{hash}", page.display());
+    // A file URL: the characters a path may hold that a URL reads otherwise,
+    // percent-encoded.
+    let mut path = String::new();
+    for c in page.display().to_string().chars() {
+        match c {
+            '%' | ' ' | '#' | '?' | '"' | '<' | '>' => path += &format!("%{:02X}", c as u32),
+            c => path.push(c),
+        }
+    }
+    let url = format!("file://{path}#{hash}");
     let mut cmd = std::process::Command::new(browser);
     cmd.args([
         "--headless",
