@@ -122,6 +122,39 @@ fn demo_page_plays_and_scrubs_in_chromium() {
         BrowserOutput::Dom,
     );
     assert_eq!(frame_of(&dom), worst);
+    // The page unpacked the encoder's numbers: the last joint's positions
+    // (original and decoded, to the 0.1 mm quantum) and the frame's largest
+    // joint error (to the 0.01 mm error quantum) are the encoder's.
+    let probe: Vec<f64> = body_data(&dom, "probe")
+        .expect("data-probe")
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let m = mocap_encoder::bvh::read_file(&bvh).unwrap();
+    let metres = mocap_encoder::units::detect(&m).metres();
+    let bytes = std::fs::read(&clip).unwrap();
+    let c = mocap_decoder::Clip::parse(&bytes).unwrap();
+    let back = mocap_encoder::clipfile::decode_against(&c, &m, metres).unwrap();
+    let j = page.joints;
+    let at = worst * j + j - 1;
+    let a = mocap_encoder::metrics::positions_mm(&m, metres)[at];
+    let b = mocap_encoder::metrics::positions_mm(&back, metres)[at];
+    for k in 0..3 {
+        assert!(
+            (probe[k] - a[k]).abs() <= 0.051,
+            "original {probe:?} vs {a:?}"
+        );
+        assert!(
+            (probe[3 + k] - b[k]).abs() <= 0.051,
+            "decoded {probe:?} vs {b:?}"
+        );
+    }
+    let max = page.metrics.as_ref().unwrap().max_joint_err_mm;
+    assert!(
+        (probe[6] - max).abs() <= 0.0051,
+        "max error {} vs {max}",
+        probe[6]
+    );
     let dom = browse(
         &browser,
         &html,

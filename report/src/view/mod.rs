@@ -17,7 +17,9 @@
 //! The page exposes its state on `<body>` for tests: `data-ready="1"` once
 //! drawn, `data-frame` (the frame shown), `data-playing`, `data-frames`,
 //! `data-worst` (with a clip), `data-view` (the 3-D view's rectangle,
-//! `x,y,w,h` in CSS pixels); the URL hash `#frame=worst`, `#frame=123`,
+//! `x,y,w,h` in CSS pixels), `data-probe` (the last joint's unpacked
+//! position at the frame shown, the decoded one's and the frame's largest
+//! joint error, mm); the URL hash `#frame=worst`, `#frame=123`,
 //! `&paused=1`, `&speed=2`, `&loop=0`, `&side=1` sets it on load.
 
 pub mod pack;

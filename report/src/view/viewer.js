@@ -4,7 +4,7 @@
 // player.js. No libraries, no network.
 //
 // State for tests, on <body> besides player.js's: data-worst, data-view (the
-// 3-D view's x,y,w,h in CSS px). URL hash besides player.js's: &side=1.
+// 3-D view's x,y,w,h in CSS px), data-probe (see probe()). URL hash besides player.js's: &side=1.
 "use strict";
 (function () {
   const D = JSON.parse(document.getElementById("motion").textContent);
@@ -127,10 +127,22 @@
       " mm); ▲ worst frame " + worst + "; click to jump";
   }
   if (hasClip) body.dataset.worst = String(worst);
+  // data-probe: the last joint's unpacked position (mm) at frame f, the
+  // decoded one's, and the frame's largest joint error, so a test can check
+  // the unpacking against the encoder's own numbers.
+  function probe(f) {
+    const i = (f * J + J - 1) * 3;
+    const p = [orig[i], orig[i + 1], orig[i + 2]];
+    if (hasClip) p.push(dec[i], dec[i + 1], dec[i + 2], frameMax[f]);
+    body.dataset.probe = p.map((v) => v.toFixed(3)).join(",");
+  }
   const P = mocapPlayer({
     frames: N, frameTime: D.frameTime, unit: "frame", worst: hasClip ? worst : null,
     draw: () => draw(),
-    readout: (f) => (hasClip ? " · max " + frameMax[f].toFixed(2) + " mm" : ""),
+    readout: (f) => {
+      probe(f);
+      return hasClip ? " · max " + frameMax[f].toFixed(2) + " mm" : "";
+    },
     hash: (h) => {
       if (h.get("side") === "1") { V.side = true; $("side").checked = true; }
     },
