@@ -179,6 +179,26 @@ fn demo_page_plays_and_scrubs_in_chromium() {
     assert!(blue > 500, "original skeleton not drawn: {blue} pixels");
     assert!(heat > 200, "decoded skeleton not drawn: {heat} pixels");
 
+    // Side by side: the original on the left half of the view, the decoded
+    // skeleton on the right (the legend's corner left out of both).
+    let shot = out_dir().join("demo_side.png");
+    browse(
+        &browser,
+        &html,
+        "frame=worst&paused=1&side=1",
+        800,
+        BrowserOutput::Screenshot(&shot),
+    );
+    let half = (rect[2] + 220) / 2;
+    let left = [rect[0], rect[1], half, rect[3]];
+    let right = [rect[0] + half, rect[1], half - 220, rect[3]];
+    let (blue_l, heat_l) = count_pixels(&shot, left, ORIGINAL);
+    let (blue_r, heat_r) = count_pixels(&shot, right, ORIGINAL);
+    assert!(
+        blue_l > 500 && heat_r > 200 && blue_r < blue_l / 10 && heat_l < heat_r / 10,
+        "side by side: left {blue_l} original, {heat_l} heat; right {blue_r} original, {heat_r} heat"
+    );
+
     // Without the clip: the original alone, no heat colours.
     let alone = view::load(&bvh, None, None).unwrap();
     let html = out_dir().join("demo_alone.html");
