@@ -14,7 +14,7 @@
 //! errors are `u16` little-endian of the smallest error quantum of
 //! [`ERROR_QUANTA_MM`] that holds the largest one, base64. The 10 s, 120 Hz
 //! CMU clip 05_04 (38 joints with End Sites) with its decoded version makes
-//! a page of 871 376 bytes (`tests/tests/view_browser.rs` checks < 2 MB).
+//! a page of 874 643 bytes (`tests/tests/view_browser.rs` checks < 2 MB).
 
 use base64::Engine as _;
 
