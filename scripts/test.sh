@@ -6,10 +6,10 @@
 #     trips, corruption, QEMU parity on M0/M3/M4F);
 #  3. a fuzz smoke (scripts/fuzz.sh --smoke: each target 30 s) when nightly and cargo-fuzz are
 #     installed; it says so when they are not.
-# It installs what the tests need first (QEMU, lld, the Cortex-M toolchain route). The corpus is
-# read from $MOCAP_CORPUS (default ../shared/data); without it the corpus tests print
-# `SKIPPED: <test>: <why>` and return, and without QEMU the QEMU tests do — except under CI (CI
-# set), where both fail.
+# It installs what the tests need first (QEMU, lld, the Cortex-M toolchain route, Chromium for the
+# `mocap view` page tests). The corpus is read from $MOCAP_CORPUS (default ../shared/data); without
+# it the corpus tests print `SKIPPED: <test>: <why>` and return, and without QEMU or Chromium the
+# QEMU or browser tests do — except under CI (CI set), where they fail.
 #
 # The last line counts everything: `N passed, N failed, N skipped`, where a test that printed
 # SKIPPED counts as skipped (not passed), as does an #[ignore]d test and a fuzz target that did not
@@ -20,6 +20,9 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
 cd "$MOCAP_REPO_ROOT"
 mocap_toolchain_setup
+# The `mocap view` page tests open the page in headless Chromium (tests/tests/view_browser.rs);
+# only the tests need it, not the firmware scripts.
+mocap_ensure_packages chromium
 mocap_toolchain_summary >&2
 
 export MOCAP_CORPUS="${MOCAP_CORPUS:-$(pwd)/../shared/data}"

@@ -44,6 +44,8 @@ enum Command {
     Show(cmd::show::Args),
     /// Motion Track picture (Hu et al. 2010): clips as curves in a 2-D map of key poses.
     Track(cmd::track::Args),
+    /// A self-contained HTML page that plays a BVH in 3-D, with its decoded .mcb clip overlaid.
+    View(cmd::view::Args),
     /// Write the procedural demo clip the project ships.
     Generate(cmd::generate::Args),
 }
@@ -59,6 +61,7 @@ fn run(cli: Cli) -> cmd::Result {
         Command::Send(a) => cmd::send::run(a),
         Command::Show(a) => cmd::show::run(a),
         Command::Track(a) => cmd::track::run(a),
+        Command::View(a) => cmd::view::run(a),
         Command::Generate(a) => cmd::generate::run(a),
     }
 }

@@ -107,3 +107,162 @@ pub fn sample_all(
     }
     Ok(samples)
 }
+
+/// Why a clip cannot be played back against a source motion: it was not
+/// encoded from it (another skeleton, another length), or it does not decode.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SourceMismatch {
+    /// A servo clip holds servo pulses, not the source's channels.
+    #[error("it is a servo clip (servo pulses, not the source's {0} channels)")]
+    ServoClip(usize),
+    /// The clip has another frame or channel count.
+    #[error(
+        "it has {clip_frames} frames × {clip_channels} channels but the source has \
+         {frames} × {channels}"
+    )]
+    Shape {
+        /// The clip's frames.
+        clip_frames: usize,
+        /// The clip's channels per frame.
+        clip_channels: usize,
+        /// The source's frames.
+        frames: usize,
+        /// The source's channels per frame.
+        channels: usize,
+    },
+    /// The clip's skeleton differs from the source's at a joint (its parent,
+    /// channels, name or offset).
+    #[error("its skeleton differs from the source's at joint {index} ({name}): {what}")]
+    Skeleton {
+        /// Joint index in file order.
+        index: usize,
+        /// The source's name of that joint.
+        name: String,
+        /// What differs.
+        what: &'static str,
+    },
+    /// The clip has another joint count.
+    #[error("its skeleton has {clip} joints but the source's has {joints}")]
+    JointCount {
+        /// The clip's joints (End Sites included).
+        clip: usize,
+        /// The source's joints.
+        joints: usize,
+    },
+    /// The clip does not decode.
+    #[error(transparent)]
+    Decode(#[from] mocap_decoder::Error),
+}
+
+/// Decodes `clip` as an encoding of `source` and returns it as a motion on
+/// the source's skeleton (values unwrapped as the encoder coded them), in
+/// the units of `metres_per_unit`, after checking that it is one: same
+/// skeleton (parents, channels, the names the clip keeps, offsets within
+/// 2 µm), same frame and channel counts. What `mocap eval` and `mocap view`
+/// measure.
+pub fn decode_against(
+    clip: &Clip<'_>,
+    source: &Motion,
+    metres_per_unit: f64,
+) -> Result<Motion, SourceMismatch> {
+    let h = clip.header();
+    if h.is_servo_form() {
+        return Err(SourceMismatch::ServoClip(source.channels()));
+    }
+    let theirs = skeleton(clip);
+    let ours = &source.skeleton.joints;
+    if theirs.joints.len() != ours.len() {
+        return Err(SourceMismatch::JointCount {
+            clip: theirs.joints.len(),
+            joints: ours.len(),
+        });
+    }
+    // Header offsets are whole micrometres of the clip's source unit.
+    let unit_m = f64::from(h.source_unit_nm()) * 1e-9;
+    let tolerance = 2e-6 / unit_m.max(f64::MIN_POSITIVE);
+    for (index, (a, b)) in theirs.joints.iter().zip(ours).enumerate() {
+        let what = if a.parent != b.parent || a.end_site != b.end_site {
+            "parent"
+        } else if a.channels != b.channels {
+            "channels"
+        } else if !a.name.is_empty() && a.name != b.name {
+            "name"
+        } else if (0..3).any(|k| (a.offset[k] - b.offset[k]).abs() > tolerance) {
+            "offset"
+        } else {
+            continue;
+        };
+        return Err(SourceMismatch::Skeleton {
+            index,
+            name: b.name.clone(),
+            what,
+        });
+    }
+    if h.channel_count() != source.channels() || h.frame_count() as usize != source.frames() {
+        return Err(SourceMismatch::Shape {
+            clip_frames: h.frame_count() as usize,
+            clip_channels: h.channel_count(),
+            frames: source.frames(),
+            channels: source.channels(),
+        });
+    }
+    let frames = decode_all(clip)?;
+    Ok(fixed::from_fixed(
+        &source.skeleton,
+        source.frame_time,
+        &frames,
+        metres_per_unit,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    use crate::{generate, units};
+
+    #[test]
+    fn a_clip_plays_against_its_source_and_not_another() {
+        let m = generate::animatronic_demo();
+        let metres = units::detect(&m).metres();
+        let opts = EncodeOptions {
+            codec: CodecChoice::Index,
+            bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
+            metres_per_unit: metres,
+            key_interval: None,
+        };
+        let bytes = encode::encode(&m, &opts).unwrap().bytes;
+        let clip = Clip::parse(&bytes).unwrap();
+        let back = decode_against(&clip, &m, metres).unwrap();
+        assert_eq!((back.frames(), back.channels()), (m.frames(), m.channels()));
+
+        let mut short = m.clone();
+        short.values.truncate(100 * m.channels());
+        assert!(matches!(
+            decode_against(&clip, &short, metres),
+            Err(SourceMismatch::Shape { clip_frames, frames: 100, .. }) if clip_frames == m.frames()
+        ));
+        let mut longer = m.clone();
+        longer.skeleton.joints[2].offset[1] += 1.0;
+        let e = decode_against(&clip, &longer, metres).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                SourceMismatch::Skeleton {
+                    index: 2,
+                    what: "offset",
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        let mut renamed = m.clone();
+        renamed.skeleton.joints[3].name = "Other".into();
+        let e = decode_against(&clip, &renamed, metres).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "its skeleton differs from the source's at joint 3 (Other): name"
+        );
+    }
+}

@@ -189,6 +189,13 @@ pub struct HardClamps {
 }
 
 impl ServoStream {
+    /// The pulse targets the playback loop was given, one per servo (rig
+    /// order) per tick of the clip, ¼ µs: what [`ServoStream::pulses`] sent
+    /// before range, speed and hard limits acted on it.
+    pub fn targets(&self) -> &[Vec<u16>] {
+        &self.replay.targets
+    }
+
     /// The ticks that bring every servo to rest when the playback stops
     /// after its first `ticks` ticks (`mocap play` stopped by Ctrl-C or
     /// SIGTERM): the same return to rest as after the clip's last tick —

@@ -246,3 +246,140 @@ pub fn servo_demo_clip_for(
     std::fs::write(&path, &bytes).unwrap();
     (path, bytes)
 }
+
+/// `m` encoded with the `index` codec at 1° (the encoder's default), its
+/// unit detected: the clip's bytes.
+pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
+    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    let opts = EncodeOptions {
+        codec: CodecChoice::Index,
+        bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
+        metres_per_unit: mocap_encoder::units::detect(m).metres(),
+        key_interval: None,
+    };
+    encode::encode(m, &opts).unwrap().bytes
+}
+
+/// The headless browser of the page tests (`mocap view`): Debian's
+/// `chromium`, or `$MOCAP_CHROMIUM`. Without it a test prints SKIPPED and
+/// returns (`None`), except under `CI`, where a missing browser fails it.
+pub fn chromium() -> Option<PathBuf> {
+    let exe = std::env::var_os("MOCAP_CHROMIUM").map_or_else(|| "chromium".into(), PathBuf::from);
+    let ok = std::process::Command::new(&exe)
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        if std::env::var_os("CI").is_some() {
+            panic!(
+                "{} missing in CI: run the README's test command",
+                exe.display()
+            );
+        }
+        skipped(&format!(
+            "{} not found (run scripts/test.sh, which installs Debian's chromium)",
+            exe.display()
+        ));
+        return None;
+    }
+    Some(exe)
+}
+
+/// What a headless run of [`browse`] returns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BrowserOutput<'a> {
+    /// The DOM after the run, serialised (`--dump-dom`).
+    Dom,
+    /// A PNG screenshot of the window, written to this path.
+    Screenshot(&'a std::path::Path),
+}
+
+/// Opens `page#hash` in headless `browser` (from [`chromium`]) in a
+/// 1200×800 window, lets `virtual_ms` of virtual time pass (timers and the
+/// page's clock follow it, not the wall clock), then dumps the DOM (the
+/// returned string) or takes a screenshot (empty string). No network: the
+/// page is a local file and the browser's background services are off.
+pub fn browse(
+    browser: &std::path::Path,
+    page: &std::path::Path,
+    hash: &str,
+    virtual_ms: u32,
+    output: BrowserOutput<'_>,
+) -> String {
+    let profile = std::env::temp_dir().join(format!(
+        "mocap-chromium-{}-{:?}",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    let page = page.canonicalize().expect("page exists");
+    // A file URL: the characters a path may hold that a URL reads otherwise,
+    // percent-encoded.
+    let mut path = String::new();
+    for c in page.display().to_string().chars() {
+        match c {
+            '%' | ' ' | '#' | '?' | '"' | '<' | '>' => path += &format!("%{:02X}", c as u32),
+            c => path.push(c),
+        }
+    }
+    let url = format!("file://{path}#{hash}");
+    let mut cmd = std::process::Command::new(browser);
+    cmd.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--disable-extensions",
+        "--hide-scrollbars",
+        "--force-device-scale-factor=1",
+        "--window-size=1200,800",
+    ])
+    .arg(format!("--user-data-dir={}", profile.display()))
+    .arg(format!("--virtual-time-budget={virtual_ms}"));
+    match output {
+        BrowserOutput::Dom => cmd.arg("--dump-dom"),
+        BrowserOutput::Screenshot(p) => cmd.arg(format!("--screenshot={}", p.display())),
+    };
+    // Output to files and a deadline: a browser that hangs fails the test
+    // instead of stalling the run.
+    std::fs::create_dir_all(&profile).expect("browser profile dir");
+    let (so, se) = (profile.join("stdout"), profile.join("stderr"));
+    let mut child = cmd
+        .arg(&url)
+        .stdout(std::fs::File::create(&so).expect("stdout file"))
+        .stderr(std::fs::File::create(&se).expect("stderr file"))
+        .spawn()
+        .expect("run the browser");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(180);
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait for the browser") {
+            break Some(s);
+        }
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let stdout = std::fs::read_to_string(&so).unwrap_or_default();
+    let stderr = std::fs::read_to_string(&se).unwrap_or_default();
+    let _ = std::fs::remove_dir_all(&profile);
+    match status {
+        Some(s) if s.success() => stdout,
+        Some(s) => panic!("{} {url}: {s}\n{stderr}", browser.display()),
+        None => panic!("{} {url}: no answer in 180 s\n{stderr}", browser.display()),
+    }
+}
+
+/// The value of `data-<name>` on the `<body>` of a dumped DOM.
+pub fn body_data(dom: &str, name: &str) -> Option<String> {
+    let start = dom.find("<body")?;
+    let tag = &dom[start..start + dom[start..].find('>')?];
+    let key = format!("data-{name}=\"");
+    let from = tag.find(&key)? + key.len();
+    Some(tag[from..from + tag[from..].find('"')?].to_string())
+}

@@ -13,21 +13,10 @@ fn corpus_decoded_clip_tracks_its_source() {
     ) else {
         return;
     };
-    use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
     let walk = mocap_encoder::bvh::read_file(&walk).unwrap();
     let run = mocap_encoder::bvh::read_file(&run).unwrap();
-    let unit = mocap_encoder::units::detect(&walk);
-    let enc = encode::encode(
-        &walk,
-        &EncodeOptions {
-            codec: CodecChoice::Index,
-            bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
-            metres_per_unit: unit.metres(),
-            key_interval: None,
-        },
-    )
-    .unwrap();
-    let clip = mocap_decoder::Clip::parse(&enc.bytes).unwrap();
+    let enc = mocap_tests::encode_index_1deg(&walk);
+    let clip = mocap_decoder::Clip::parse(&enc).unwrap();
     let decoded = mocap_encoder::clipfile::to_motion(&clip).unwrap();
     let joints = rotating_joints(&walk);
     let qs: Vec<_> = [&walk, &run, &decoded]

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use mocap_encoder::{bvh, clipfile, fixed, metrics};
+use mocap_encoder::{bvh, clipfile, metrics};
 use mocap_report::plot;
 
 use super::{parse_clip, read_clip, UnitArg};
@@ -30,21 +30,13 @@ pub fn run(a: Args) -> super::Result {
     let unit = a.units.resolve(&m);
     let bytes = read_clip(&a.clip)?;
     let clip = parse_clip(&a.clip, &bytes)?;
-    let h = clip.header();
-    if h.channel_count() != m.channels() || h.frame_count() as usize != m.frames() {
-        return Err(format!(
-            "{} has {} frames × {} channels but {} has {} × {}",
+    let back = clipfile::decode_against(&clip, &m, unit.metres()).map_err(|e| {
+        format!(
+            "{} does not play against {}: {e}",
             a.clip.display(),
-            h.frame_count(),
-            h.channel_count(),
-            a.input.display(),
-            m.frames(),
-            m.channels()
+            a.input.display()
         )
-        .into());
-    }
-    let frames = clipfile::decode_all(&clip)?;
-    let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
+    })?;
     let file_bytes = std::fs::metadata(&a.input)
         .map(|x| x.len() as usize)
         .unwrap_or(0);

@@ -13,6 +13,7 @@ pub mod play;
 pub mod send;
 pub mod show;
 pub mod track;
+pub mod view;
 
 use std::path::{Path, PathBuf};
 

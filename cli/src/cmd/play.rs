@@ -122,17 +122,7 @@ fn play_show(
             let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
             Script::parse(&text, &p.display().to_string(), &show)?
         }
-        None => {
-            use mocap_decoder::Command;
-            let first = match show.cues().filter(|c| c.list_count() > 0) {
-                Some(_) => Command::List(0),
-                None => Command::Play(0),
-            };
-            Script {
-                commands: vec![(0, mocap_encoder::show::play::ShowRequest::Run(first))],
-                end_us: None,
-            }
-        }
+        None => Script::first_list_or_clip(&show),
     };
     let rig = a.rig.as_ref().map(|r| Rig::read_file(r)).transpose()?;
     let figure = match (&rig, show.rig()) {

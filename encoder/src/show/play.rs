@@ -15,6 +15,7 @@
 //! 20     end              # stop the show here (default: when it is done)
 //! ```
 
+use mocap_decoder::show::player::Now;
 use mocap_decoder::show::runner::{Command, Output};
 use mocap_decoder::{tick_us, Show, ShowRunner};
 pub use mocap_servo::stream::ShowRequest;
@@ -158,6 +159,21 @@ impl Script {
     }
 }
 
+impl Script {
+    /// The script of a show run without one: its first cue list from time
+    /// 0, or its first clip when it has no cue list.
+    pub fn first_list_or_clip(show: &Show<'_>) -> Script {
+        let first = match show.cues().filter(|c| c.list_count() > 0) {
+            Some(_) => Command::List(0),
+            None => Command::Play(0),
+        };
+        Script {
+            commands: vec![(0, ShowRequest::Run(first))],
+            end_us: None,
+        }
+    }
+}
+
 /// A played show: the servo stream and the cues' output events.
 #[derive(Clone, Debug)]
 pub struct ShowPlay {
@@ -166,6 +182,9 @@ pub struct ShowPlay {
     /// Output events (`gpio`, `serial` cues) and their show times, µs, as
     /// the firmware prints them (`# event …`).
     pub events: Vec<(u64, String)>,
+    /// What the show player played at each tick of the show (its clip, its
+    /// state: playing, blending, …), before the return to rest.
+    pub timeline: Vec<Now>,
 }
 
 /// The line an output event prints on the host and on the firmware's UART.
@@ -210,6 +229,7 @@ pub fn show_stream(
     let max_ticks = ((max_s.max(0.0) * f64::from(rate_mhz) / 1000.0) as u64).min(MAX_TICKS);
     let mut poses: Vec<i32> = Vec::new();
     let mut events = Vec::new();
+    let mut timeline = Vec::new();
     let mut next = 0;
     let mut pose = vec![0i32; n];
     let mut ticks = 0u64;
@@ -226,7 +246,7 @@ pub fn show_stream(
             }
             next += 1;
         }
-        runner.tick(t, &mut pose, &mut emit)?;
+        timeline.push(runner.tick(t, &mut pose, &mut emit)?);
         poses.extend_from_slice(&pose);
         ticks += 1;
         if script.end_us.is_none() && next >= script.commands.len() && runner.is_done() {
@@ -256,7 +276,11 @@ pub fn show_stream(
         None => None,
     };
     let stream = play::drive(targets, &servos, rate_mhz, protocol, None, identity)?;
-    Ok(ShowPlay { stream, events })
+    Ok(ShowPlay {
+        stream,
+        events,
+        timeline,
+    })
 }
 
 /// Show time between two `Sync` frames of `mocap send --cues`, µs.
