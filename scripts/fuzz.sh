@@ -13,8 +13,9 @@
 # clips, so the fuzzer starts from valid files: the shipped demo, every codec and a servo clip
 # of the demo and, when present, clips encoded from the CMU corpus. Prints the executions and
 # coverage of each target from libFuzzer's output; a crash prints libFuzzer's report and the
-# input it saved (decoder-nostd/fuzz/artifacts/). Logs: target/fuzz/. The last line is
-# `fuzz smoke: N passed, N failed` (or `fuzz: ...` outside --smoke).
+# input it saved (decoder-nostd/fuzz/artifacts/). The roundtrip corpus starts from the minimised
+# corpus of the long runs, committed as decoder-nostd/fuzz/seeds/roundtrip.tar.gz. Logs:
+# target/fuzz/. The last line is `fuzz smoke: N passed, N failed` (or `fuzz: ...` outside --smoke).
 set -euo pipefail
 # shellcheck source=scripts/toolchain.sh
 source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
@@ -69,6 +70,12 @@ encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
     -o "$seeds/demo_servo.mcb" --codec pca-spline --max-error 1deg
 encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
     -o "$seeds/demo_servo_pred.mcb" --codec predictive --max-error 0.5deg
+
+# ---- seeds for roundtrip: the minimised corpus of the long runs (BENCHMARKS.md §4), committed as
+# decoder-nostd/fuzz/seeds/roundtrip.tar.gz (2 897 arbitrary motions, 617 KB unpacked); files the
+# fuzzer has added since stay.
+mkdir -p decoder-nostd/fuzz/corpus
+tar -xzf decoder-nostd/fuzz/seeds/roundtrip.tar.gz -C decoder-nostd/fuzz/corpus --keep-old-files 2>/dev/null || true
 
 # ---- build, then run each target
 cd decoder-nostd/fuzz
