@@ -64,33 +64,38 @@
   const worst = hasClip ? D.worstFrame : 0;
 
   // ---- scene extents ----
-  let floor = Infinity, lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
-  for (let i = 0; i < N * J; i++) {
-    if (orig[i * 3 + 1] < floor) floor = orig[i * 3 + 1];
-  }
-  for (let j = 0; j < J; j++) {
-    for (let k = 0; k < 3; k++) {
-      const v = orig[j * 3 + k];
-      if (v < lo[k]) lo[k] = v;
-      if (v > hi[k]) hi[k] = v;
-    }
-  }
-  const size = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1);
-  // Each frame's centre on the ground (mean of its joints' x and z), which
-  // the camera follows (the root of some rigs stays put while the hips move),
-  // and the middle of all of them.
-  const centre = new Float32Array(N * 2);
+  // `size`: the body's largest extent in any frame (not frame 0's: CMU's
+  // first frame is a reference pose); each frame's centre (mean of its
+  // joints' x and z, the middle of its heights), which the camera follows
+  // (the root of some rigs stays put while the hips move, and a climb lifts
+  // the whole body), and the middle of all of them.
+  let floor = Infinity, size = 1;
+  const centre = new Float32Array(N * 3);
   let cx0 = Infinity, cx1 = -Infinity, cz0 = Infinity, cz1 = -Infinity;
+  let cy0 = Infinity, cy1 = -Infinity;
   for (let f = 0; f < N; f++) {
+    const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
     let sx = 0, sz = 0;
     for (let j = 0; j < J; j++) {
-      sx += orig[(f * J + j) * 3];
-      sz += orig[(f * J + j) * 3 + 2];
+      const at = (f * J + j) * 3;
+      // Extents without the root when it has joints below (a rig's root
+      // such as iclone's RL_BoneRoot stays at the origin as the body walks).
+      for (let k = 0; k < 3 && (j > 0 || J === 1); k++) {
+        const v = orig[at + k];
+        if (v < lo[k]) lo[k] = v;
+        if (v > hi[k]) hi[k] = v;
+      }
+      sx += orig[at];
+      sz += orig[at + 2];
     }
-    const x = sx / J, z = sz / J;
-    centre[f * 2] = x;
-    centre[f * 2 + 1] = z;
+    size = Math.max(size, hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    floor = Math.min(floor, lo[1]);
+    const x = sx / J, y = (lo[1] + hi[1]) / 2, z = sz / J;
+    centre[f * 3] = x;
+    centre[f * 3 + 1] = y;
+    centre[f * 3 + 2] = z;
     cx0 = Math.min(cx0, x); cx1 = Math.max(cx1, x);
+    cy0 = Math.min(cy0, y); cy1 = Math.max(cy1, y);
     cz0 = Math.min(cz0, z); cz1 = Math.max(cz1, z);
   }
   const gridStep = niceStep(size / 3);
@@ -166,8 +171,8 @@
   }
   function target() {
     const f = S.frame;
-    if (V.follow) return [centre[f * 2], floor + size * 0.45, centre[f * 2 + 1]];
-    return [(cx0 + cx1) / 2, floor + size * 0.45, (cz0 + cz1) / 2];
+    if (V.follow) return [centre[f * 3], centre[f * 3 + 1], centre[f * 3 + 2]];
+    return [(cx0 + cx1) / 2, (cy0 + cy1) / 2, (cz0 + cz1) / 2];
   }
   function camera() {
     const t = target();
