@@ -98,9 +98,10 @@ fw_clippy() {
         echo "== mode: ${mode:-frames}"
         (
             cd firmware-example
-            # Not scripts/firmware.sh's target dir: sharing it would rerun the firmware's build
-            # script with these modes and so relink the ELF of its next build.
-            export MOCAP_SAMPLE_US="" MOCAP_SERVO="" MOCAP_STREAM="" CARGO_TARGET_DIR="target/clippy-$board"
+            # scripts/firmware.sh's target dir, shared by every board: the host side (the build
+            # script and mocap-encoder) is compiled once for clippy and the builds. (A build after
+            # clippy reruns the build script with its own modes and relinks the ELF: seconds.)
+            export MOCAP_SAMPLE_US="" MOCAP_SERVO="" MOCAP_STREAM="" CARGO_TARGET_DIR="target/fw"
             [ -z "$mode" ] || export "${mode?}"
             mocap_cargo "$target" clippy --release --no-default-features --features "board-$board" \
                 -- -D warnings

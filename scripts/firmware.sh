@@ -184,12 +184,16 @@ build() {
         cp "$figure_abs" "$staged_figure.$$" && mv -f "$staged_figure.$$" "$staged_figure"
     fi
 
-    target_dir="$FW/target/$BOARD"
-    elf_dir="$target_dir/elf"
+    # One target dir for every board (and for check.sh's firmware clippy): the host side of the
+    # build (the build script and its dependencies, mocap-encoder among them) is compiled once,
+    # not once per board; each board's code goes to the target's own subfolder.
+    target_dir="$FW/target/fw"
+    elf_dir="$FW/target/$BOARD/elf"
     elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}.elf"
     mkdir -p "$elf_dir"
-    lock="$FW/target/$BOARD.lock"
-    # One build per board at a time; the ELF is copied out under the lock.
+    lock="$FW/target/fw.lock"
+    # One build at a time (cargo locks the shared target dir anyway); the ELF is copied out
+    # under the lock.
     (
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
