@@ -216,17 +216,16 @@ fn demo_page_plays_and_scrubs_in_chromium() {
     assert!(heat < 20, "{heat} heat pixels without a clip");
 }
 
-#[test]
-fn corpus_clip_page_in_chromium() {
-    let Some(bvh) = corpus_file("cmu", "05_04.bvh") else {
-        return;
-    };
-    let Some(browser) = chromium() else {
-        return;
-    };
+/// The page of a corpus file with its index clip at 1°: built, its worst
+/// frame shown on load (`#frame=worst`), the skeleton drawn with heat on the
+/// decoded joints. Returns the page.
+fn corpus_clip_page(folder: &str, name: &str) -> Option<view::Page> {
+    let bvh = corpus_file(folder, name)?;
+    let browser = chromium()?;
     let m = mocap_encoder::bvh::read_file(&bvh).unwrap();
     let enc = encode_index_1deg(&m);
-    let clip = out_dir().join("05_04.mcb");
+    let stem = name.trim_end_matches(".bvh");
+    let clip = out_dir().join(format!("{stem}.mcb"));
     std::fs::write(&clip, &enc).unwrap();
     let page = view::load(&bvh, Some(&clip), None).unwrap();
     let x = page.metrics.as_ref().unwrap();
@@ -240,11 +239,7 @@ fn corpus_clip_page_in_chromium() {
         x.arms_mm,
         x.max_joint_err_frame
     );
-    // 05_04 is 10 s at 120 Hz: the size target.
-    assert_eq!(page.frames, 1200);
-    assert!(page.html.len() < 2_000_000, "{} bytes", page.html.len());
-    assert_eq!(page.quantum_mm, 0.1);
-    let html = out_dir().join("05_04.html");
+    let html = out_dir().join(format!("{stem}.html"));
     std::fs::write(&html, &page.html).unwrap();
     let dom = browse(
         &browser,
@@ -254,7 +249,7 @@ fn corpus_clip_page_in_chromium() {
         BrowserOutput::Dom,
     );
     assert_eq!(frame_of(&dom), x.max_joint_err_frame);
-    let shot = out_dir().join("05_04_worst.png");
+    let shot = out_dir().join(format!("{stem}_worst.png"));
     browse(
         &browser,
         &html,
@@ -265,8 +260,32 @@ fn corpus_clip_page_in_chromium() {
     let (blue, heat) = count_pixels(&shot, view_rect(&dom), ORIGINAL);
     assert!(
         blue > 300 && heat > 100,
-        "{blue} original, {heat} heat pixels"
+        "{stem}: {blue} original, {heat} heat pixels"
     );
+    Some(page)
+}
+
+#[test]
+fn corpus_clip_page_in_chromium() {
+    let Some(page) = corpus_clip_page("cmu", "05_04.bvh") else {
+        return;
+    };
+    // 05_04 is 10 s at 120 Hz: the size target.
+    assert_eq!(page.frames, 1200);
+    assert!(page.html.len() < 2_000_000, "{} bytes", page.html.len());
+    assert_eq!(page.quantum_mm, 0.1);
+}
+
+/// The game rig (101 joints under `RL_BoneRoot`, which stays at the
+/// origin) and the long take (2 339 frames, 13.5 m of travel).
+#[test]
+fn other_rigs_and_lengths_in_chromium() {
+    if let Some(page) = corpus_clip_page("iclone-cmu", "002_01.bvh") {
+        assert_eq!(page.frames, 171);
+    }
+    if let Some(page) = corpus_clip_page("cmu-long", "01_14.bvh") {
+        assert_eq!(page.frames, 2339);
+    }
 }
 
 #[test]
