@@ -9,6 +9,7 @@
 //! The reports over them (bench, plots, Motion Track) are the
 //! `mocap-report` crate.
 
+pub mod asf;
 pub mod bvh;
 pub mod clipfile;
 pub mod codec;
