@@ -59,7 +59,7 @@ use std::fmt;
 use std::path::Path;
 
 pub use convert::{bake, BakeReport, EULER_ORDER};
-pub use motion::{parse_amc, Amc};
+pub use motion::{parse_amc, Amc, LIMIT_TOLERANCE};
 pub use skeleton::{parse_asf, AngleUnit, Asf, AsfBone, AsfRoot, AsfUnits, Dof};
 
 use crate::motion::Motion;

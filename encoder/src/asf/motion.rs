@@ -40,7 +40,7 @@ impl Amc {
     }
 
     /// Frames with at least one bone dof value outside its `limits` (the
-    /// root has none).
+    /// root has none) by more than [`LIMIT_TOLERANCE`].
     pub fn frames_outside_limits(&self, asf: &Asf) -> usize {
         (0..self.frames())
             .filter(|&f| {
@@ -49,7 +49,7 @@ impl Amc {
                     bone.limits
                         .iter()
                         .zip(v)
-                        .any(|(&(lo, hi), &x)| x < lo || x > hi)
+                        .any(|(&(lo, hi), &x)| outside(x, lo, hi))
                 })
             })
             .count()
@@ -64,7 +64,7 @@ impl Amc {
                 let n = (0..self.frames())
                     .filter(|&f| {
                         let x = self.segment(f, 1 + b, asf)[k];
-                        x < lo || x > hi
+                        outside(x, lo, hi)
                     })
                     .count();
                 if n > 0 {
@@ -74,6 +74,15 @@ impl Amc {
         }
         out
     }
+}
+
+/// How far past a limit a value may lie and still count as inside: CMU
+/// writes 0 as ±1e-14 (`lclavicle -1.16413e-014 -2.38542e-014` against
+/// `(0.0 20.0)`), which is not a violation.
+pub const LIMIT_TOLERANCE: f64 = 1e-6;
+
+fn outside(x: f64, lo: f64, hi: f64) -> bool {
+    x < lo - LIMIT_TOLERANCE || x > hi + LIMIT_TOLERANCE
 }
 
 /// The dof of a segment: the root's `order` or a bone's `dof`.
