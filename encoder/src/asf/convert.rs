@@ -176,11 +176,11 @@ fn plan(
             if dof.contains(&Dof::L) {
                 return Err(AsfError::new(
                     file,
-                    b.line,
+                    0,
                     0,
                     format!(
-                        "bone '{}': dof l (length change) has no BVH equivalent and is not supported",
-                        b.name
+                        "bone '{}' (ASF line {}): dof l (length change) has no BVH equivalent and is not supported",
+                        b.name, b.line
                     ),
                 ));
             }

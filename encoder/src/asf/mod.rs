@@ -92,11 +92,13 @@ impl fmt::Display for AsfError {
 impl std::error::Error for AsfError {}
 
 impl AsfError {
+    /// An error at `line` and `column` (a known line with column 0 is
+    /// placed at column 1: the line itself).
     pub(crate) fn new(file: &str, line: usize, column: usize, message: impl Into<String>) -> Self {
         AsfError {
             file: file.to_string(),
             line,
-            column,
+            column: if line > 0 { column.max(1) } else { column },
             message: message.into(),
         }
     }
