@@ -402,3 +402,96 @@ fn show_errors_name_the_file_and_line() {
         "{err}"
     );
 }
+
+/// A small ASF (CMU units, a bone without dof, a bone with an axis) and an
+/// AMC of `frames` frames of a knee bending.
+fn asf_amc(d: &Path, frames: usize) -> (PathBuf, PathBuf) {
+    let asf = ":units\n  mass 1.0\n  length 0.45\n  angle deg\n:root\n  order TX TY TZ RX RY RZ\n  axis XYZ\n  position 0 0 0\n  orientation 0 0 0\n:bonedata\n  begin\n    id 1\n    name hip\n    direction 0 -1 0\n    length 2\n    axis 0 0 0 XYZ\n  end\n  begin\n    id 2\n    name knee\n    direction 0 -1 0\n    length 7\n    axis 0 0 20 XYZ\n    dof rx\n    limits (-10.0 170.0)\n  end\n:hierarchy\n  begin\n    root hip\n    hip knee\n  end\n";
+    let mut amc = String::from(":FULLY-SPECIFIED\r\n:DEGREES\r\n");
+    for f in 0..frames {
+        let t = f as f64 / 120.0;
+        amc += &format!(
+            "{}\r\nroot {:.4} 17 {:.4} 0 {:.3} 0\r\nknee {:.4}\r\n",
+            f + 1,
+            t * 10.0,
+            t,
+            t * 30.0,
+            60.0 * (1.0 - (t * 6.0).cos())
+        );
+    }
+    let (a, m) = (d.join("leg.asf"), d.join("leg_01.amc"));
+    std::fs::write(&a, asf).expect("asf");
+    std::fs::write(&m, amc).expect("amc");
+    (a, m)
+}
+
+/// `mocap encode x.amc --skeleton y.asf`, then `mocap eval` of the clip
+/// against the AMC (its skeleton found beside it: leg_01.amc → leg.asf);
+/// `--fps`; the errors name the file and line.
+#[test]
+fn encode_and_eval_an_amc() {
+    let d = out_dir("asf");
+    let (asf, amc) = asf_amc(&d, 240);
+    let (asf, amc) = (asf.to_str().expect("utf-8"), amc.to_str().expect("utf-8"));
+    let clip = d.join("leg.mcb");
+    let clip = clip.to_str().expect("utf-8 path");
+    let o = mocap(&["encode", amc, "--skeleton", asf, "-o", clip]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let err = text(&o.stderr);
+    assert!(
+        err.contains("240 frames × 9 channels at 120.0 Hz, units cmu"),
+        "{err}"
+    );
+    assert!(text(&o.stdout).contains("(bound 1° holds;"));
+
+    let o = mocap(&["eval", amc, clip, "--json"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let x: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(x["frames"], 240);
+    assert!(x["angle_max_deg"].as_f64().expect("angle") <= 1.0);
+
+    let o = mocap(&["encode", amc, "--fps", "60", "-o", clip]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("at 60.0 Hz"),
+        "{}",
+        text(&o.stderr)
+    );
+
+    // Limits: the knee past 170° in some frames is a warning.
+    let bent = std::fs::read_to_string(amc)
+        .expect("amc")
+        .replace("knee 0.0000\r\n", "knee 175\r\n");
+    let bent_path = d.join("leg_02.amc");
+    std::fs::write(&bent_path, bent).expect("amc");
+    let o = mocap(&["encode", bent_path.to_str().expect("utf-8"), "-o", clip]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr)
+            .contains("1 of 240 frames have dof values outside the ASF's limits (knee rx: 1)"),
+        "{}",
+        text(&o.stderr)
+    );
+
+    let broken = d.join("leg_03.amc");
+    std::fs::write(&broken, ":DEGREES\n1\nroot 0 0 0 0 0 0\nknee 1 2\n").expect("amc");
+    let o = mocap(&["encode", broken.to_str().expect("utf-8"), "-o", clip]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        text(&o.stderr),
+        format!(
+            "mocap: error: {}:4:8: bone 'knee' has 1 dof (rx) but the line has more values\n",
+            broken.display()
+        )
+    );
+
+    let alone = d.join("walk_01.amc");
+    std::fs::write(&alone, ":DEGREES\n").expect("amc");
+    let o = mocap(&["eval", alone.to_str().expect("utf-8"), clip]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        text(&o.stderr).contains("no skeleton:") && text(&o.stderr).contains("walk.asf not found"),
+        "{}",
+        text(&o.stderr)
+    );
+}

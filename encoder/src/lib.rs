@@ -3,12 +3,13 @@
 //! MCU runs. The `mocap` command line is the `mocap-cli` crate; nothing here
 //! parses arguments or prints errors — every area returns its typed error.
 //!
-//! Motion in and out: [`bvh`], [`motion`], [`units`], [`kinematics`],
-//! [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
+//! Motion in and out: [`input`] (one entry point: BVH or ASF/AMC), [`bvh`],
+//! [`asf`], [`motion`], [`units`], [`kinematics`], [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
 //! [`clipfile`], [`metrics`]. Servos: [`rig`], [`servo_clip`], [`play`].
 //! The reports over them (bench, plots, Motion Track) are the
 //! `mocap-report` crate.
 
+pub mod asf;
 pub mod bvh;
 pub mod clipfile;
 pub mod codec;
@@ -16,6 +17,7 @@ pub mod container;
 pub mod encode;
 pub mod fixed;
 pub mod generate;
+pub mod input;
 pub mod kinematics;
 pub mod located;
 pub mod metrics;

@@ -6,12 +6,10 @@ use std::path::{Path, PathBuf};
 
 use std::time::Instant;
 
-use mocap_encoder::bvh;
 use mocap_encoder::bvh::BvhError;
 use mocap_encoder::encode::{
     self, Bound, BoundError, BoundSpec, CodecChoice, EncodeError, EncodeOptions,
 };
-use mocap_encoder::units;
 
 /// One row of the table.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -51,6 +49,9 @@ pub enum BenchError {
     /// A file is not BVH.
     #[error(transparent)]
     Bvh(#[from] BvhError),
+    /// A motion file (BVH or AMC/ASF) does not read.
+    #[error(transparent)]
+    Input(#[from] mocap_encoder::input::InputError),
     /// A file cannot be encoded at a bound.
     #[error("{}: {source}", file.display())]
     Encode {
@@ -85,11 +86,12 @@ pub fn run(
                 .map(|v| Bound::from_specs(&v))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let files = bvh::expand(paths)?;
+    let files = mocap_encoder::input::expand(paths)?;
     let mut rows = Vec::new();
     for file in &files {
-        let m = bvh::read_file(file)?;
-        let unit = units::detect(&m);
+        let input = mocap_encoder::input::read_motion(file, None)?;
+        let unit = input.unit_or_detect();
+        let m = input.motion;
         let file_bytes = std::fs::metadata(file)
             .map(|md| md.len() as usize)
             .unwrap_or(0);

@@ -17,9 +17,9 @@ pub fn corpus_dir() -> PathBuf {
     }
 }
 
-/// The `.bvh` files of one corpus folder (`cmu`, `iclone-cmu`), sorted, or
-/// `None` after printing a visible SKIPPED line when the corpus is absent.
-pub fn corpus_files(folder: &str) -> Option<Vec<PathBuf>> {
+/// The corpus folder `folder`, or `None` after printing a visible SKIPPED
+/// line when the corpus is absent (under `CI` a missing corpus fails).
+fn corpus_folder(folder: &str) -> Option<(PathBuf, std::fs::ReadDir)> {
     let dir = corpus_dir().join(folder);
     let Ok(rd) = std::fs::read_dir(&dir) else {
         // CI has the corpus: there a missing corpus is a failure, not a skip.
@@ -35,6 +35,13 @@ pub fn corpus_files(folder: &str) -> Option<Vec<PathBuf>> {
         ));
         return None;
     };
+    Some((dir, rd))
+}
+
+/// The `.bvh` files of one corpus folder (`cmu`, `iclone-cmu`), sorted, or
+/// `None` after printing a visible SKIPPED line when the corpus is absent.
+pub fn corpus_files(folder: &str) -> Option<Vec<PathBuf>> {
+    let (_, rd) = corpus_folder(folder)?;
     let mut files: Vec<PathBuf> = rd
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "bvh"))
@@ -43,10 +50,24 @@ pub fn corpus_files(folder: &str) -> Option<Vec<PathBuf>> {
     Some(files)
 }
 
-/// The corpus file `folder/name` (the folder's first file if it is not
-/// there); `None`, with the visible skip of [`corpus_files`], without the
-/// corpus.
+/// The corpus file `folder/name`: for a `.bvh` name, the folder's first
+/// `.bvh` file if it is not there; any other file (`asf-amc/16.asf`) must be
+/// there by its name. `None`, with the visible skip of [`corpus_files`],
+/// without the corpus (or, for a non-BVH file, without that file: a corpus
+/// older than the file).
 pub fn corpus_file(folder: &str, name: &str) -> Option<PathBuf> {
+    if !name.ends_with(".bvh") {
+        let (dir, _) = corpus_folder(folder)?;
+        let path = dir.join(name);
+        if !path.is_file() {
+            if std::env::var_os("CI").is_some() {
+                panic!("CI: corpus file {} not found", path.display());
+            }
+            skipped(&format!("corpus file {} not found", path.display()));
+            return None;
+        }
+        return Some(path);
+    }
     let files = corpus_files(folder)?;
     assert!(
         !files.is_empty(),

@@ -7,14 +7,17 @@ use mocap_encoder::codec::CodecChoice;
 use mocap_encoder::encode::{self, Bound, BoundSpec, EncodeOptions};
 use mocap_encoder::motion::Motion;
 use mocap_encoder::rig::Rig;
-use mocap_encoder::{bvh, servo_clip};
+use mocap_encoder::servo_clip;
 
-use super::{write, CodecArg, UnitArg};
+use super::{write, CodecArg, MotionArgs, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input BVH file.
+    /// Input motion: a BVH file, or an AMC file with its ASF skeleton
+    /// (`--skeleton`, or the `.asf` beside it).
     input: PathBuf,
+    #[command(flatten)]
+    motion: MotionArgs,
     /// Output .mcb file.
     #[arg(short, long)]
     output: PathBuf,
@@ -30,7 +33,8 @@ pub struct Args {
     /// RMS joint error); `+` joins several in one value.
     #[arg(long = "max-error", default_value = "1deg", value_parser = parse_bounds)]
     max_error: Vec<Vec<BoundSpec>>,
-    /// Length unit of the input (auto: from the skeleton's height).
+    /// Length unit of the input (auto: the ASF's declared unit, else from
+    /// the skeleton's height).
     #[arg(long, default_value = "auto")]
     units: UnitArg,
     /// Force the key-frame interval of the index codec (0 = none), or the
@@ -95,8 +99,9 @@ fn parse_bounds(s: &str) -> Result<Vec<BoundSpec>, encode::BoundError> {
 
 pub fn run(a: Args) -> super::Result {
     let Target::Mcu = a.target;
-    let m = bvh::read_file(&a.input)?;
-    let unit = a.units.resolve(&m);
+    let input = a.motion.read(&a.input)?;
+    let unit = a.units.resolve(&input);
+    let m = input.motion;
     let bound = Bound::from_specs(&a.max_error.concat());
     if let Some(rig_path) = &a.rig {
         let opts = servo_clip::ServoEncodeOptions {

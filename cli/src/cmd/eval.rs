@@ -3,17 +3,20 @@
 
 use std::path::PathBuf;
 
-use mocap_encoder::{bvh, clipfile, metrics};
+use mocap_encoder::{clipfile, metrics};
 use mocap_report::plot;
 
-use super::{parse_clip, read_clip, UnitArg};
+use super::{parse_clip, read_clip, MotionArgs, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The source BVH.
+    /// The source motion: BVH, or AMC with its ASF (`--skeleton`, or the
+    /// `.asf` beside it).
     input: PathBuf,
     /// The clip.
     clip: PathBuf,
+    #[command(flatten)]
+    motion: MotionArgs,
     /// One JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -26,8 +29,9 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> super::Result {
-    let m = bvh::read_file(&a.input)?;
-    let unit = a.units.resolve(&m);
+    let input = a.motion.read(&a.input)?;
+    let unit = a.units.resolve(&input);
+    let m = input.motion;
     let bytes = read_clip(&a.clip)?;
     let clip = parse_clip(&a.clip, &bytes)?;
     let back = clipfile::decode_against(&clip, &m, unit.metres()).map_err(|e| {

@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 
 use mocap_decoder::Clip;
 use mocap_encoder::codec::CodecChoice;
-use mocap_encoder::motion::Motion;
-use mocap_encoder::units::{self, LengthUnit};
+use mocap_encoder::input::{self, Input, InputOptions};
+use mocap_encoder::units::LengthUnit;
 
 /// What a subcommand returns: the library's typed errors (and the CLI's own
 /// messages), printed by `main` as `mocap: error: …`.
@@ -71,13 +71,86 @@ impl std::str::FromStr for UnitArg {
 }
 
 impl UnitArg {
-    /// The unit of `m`.
-    pub fn resolve(&self, m: &Motion) -> LengthUnit {
+    /// The unit of `input`: fixed, else the one the file declares (an
+    /// ASF's `:units length`), else guessed from the skeleton's height.
+    pub fn resolve(&self, input: &Input) -> LengthUnit {
         match self {
-            UnitArg::Auto => units::detect(m),
+            UnitArg::Auto => input.unit_or_detect(),
             UnitArg::Fixed(u) => *u,
         }
     }
+
+    /// The fixed unit, or `None` for `auto`.
+    pub fn fixed(&self) -> Option<LengthUnit> {
+        match self {
+            UnitArg::Auto => None,
+            UnitArg::Fixed(u) => Some(*u),
+        }
+    }
+}
+
+/// `--skeleton` and `--fps`: how an `.amc` input is read.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct MotionArgs {
+    /// The ASF skeleton of an `.amc` input (default: the `.asf` beside it
+    /// named as the AMC, or as its name up to the first `_`, CMU's naming:
+    /// 16_15.amc → 16.asf).
+    #[arg(long)]
+    skeleton: Option<PathBuf>,
+    /// Frame rate of an `.amc` input, which states none (default: 120,
+    /// CMU's capture rate).
+    #[arg(long, value_parser = parse_fps)]
+    fps: Option<f64>,
+}
+
+fn parse_fps(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("'{s}' is not a positive frame rate in Hz")),
+    }
+}
+
+impl MotionArgs {
+    /// The library's options.
+    pub fn options(&self) -> InputOptions {
+        InputOptions {
+            skeleton: self.skeleton.clone(),
+            frame_time: self.fps.map(|f| 1.0 / f),
+        }
+    }
+
+    /// Reads `path` (BVH, or AMC with its ASF); warns on stderr when AMC
+    /// frames leave the ASF's limits.
+    pub fn read(&self, path: &Path) -> Result<Input, input::InputError> {
+        let i = input::read_motion_with(path, &self.options())?;
+        warn_limits(path, &i);
+        Ok(i)
+    }
+}
+
+/// `mocap: warning: …` when frames of an AMC leave its ASF's `limits`.
+pub fn warn_limits(path: &Path, i: &Input) {
+    let n = i.frames_outside_limits();
+    let Some(a) = i.asf.as_ref().filter(|_| n > 0) else {
+        return;
+    };
+    let mut worst = a.amc.limit_violations(&a.asf);
+    worst.sort_by_key(|&(_, _, frames)| std::cmp::Reverse(frames));
+    let list: Vec<String> = worst
+        .iter()
+        .take(3)
+        .map(|&(b, k, frames)| {
+            let bone = &a.asf.bones[b];
+            format!("{} {}: {frames}", bone.name, bone.dof[k].name())
+        })
+        .collect();
+    eprintln!(
+        "mocap: warning: {}: {n} of {} frames have dof values outside the ASF's limits ({}{})",
+        path.display(),
+        i.motion.frames(),
+        list.join(", "),
+        if worst.len() > 3 { ", …" } else { "" }
+    );
 }
 
 /// A file's bytes; the message names the file.

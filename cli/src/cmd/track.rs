@@ -9,8 +9,9 @@ use mocap_report::track::{self, TrackJob, TrackOptions, DEFAULT_K, DEFAULT_NEIGH
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Clips to draw: BVH files (or folders of them) and `.mcb` clips (drawn
-    /// decoded, e.g. beside their source BVH).
+    /// Clips to draw: BVH or AMC files (an AMC with the `.asf` beside it,
+    /// 16_15.amc → 16.asf), folders of them, and `.mcb` clips (drawn
+    /// decoded, e.g. beside their source).
     #[arg(required = true)]
     clips: Vec<PathBuf>,
     /// Output picture: `.svg` or `.png`.

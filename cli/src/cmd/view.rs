@@ -7,12 +7,15 @@ use std::path::{Path, PathBuf};
 
 use mocap_report::view::{self, ServoSource};
 
-use super::{write, UnitArg};
+use super::{write, MotionArgs, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The source BVH, or a servo clip or show (`.mcb`) to view alone.
+    /// The source motion (BVH, or AMC with its ASF), or a servo clip or
+    /// show (`.mcb`) to view alone.
     input: PathBuf,
+    #[command(flatten)]
+    motion: MotionArgs,
     /// The BVH's `.mcb` clip: a motion clip, shown decoded beside it, or a
     /// servo clip (with `--rig`), its curves beside the rig's signals.
     clip: Option<PathBuf>,
@@ -40,10 +43,7 @@ fn is_clip(p: &Path) -> bool {
 }
 
 pub fn run(a: Args) -> super::Result {
-    let unit = match a.units {
-        UnitArg::Auto => None,
-        UnitArg::Fixed(u) => Some(u),
-    };
+    let unit = a.units.fixed();
     let out = a.output.clone().unwrap_or_else(|| {
         let stem = a.input.file_stem().unwrap_or(a.input.as_os_str());
         PathBuf::from(stem).with_extension("html")
@@ -91,7 +91,7 @@ pub fn run(a: Args) -> super::Result {
         }
         return Ok(());
     }
-    let page = view::load(&a.input, a.clip.as_deref(), unit)?;
+    let page = view::load_with(&a.input, a.clip.as_deref(), unit, &a.motion.options())?;
     write(&out, page.html.as_bytes())?;
     eprintln!(
         "wrote {} ({} bytes; {} frames × {} joints, positions to {} mm)",

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use mocap_decoder::{consts, Clip, Loop, Show, ShowPlayer};
 
-use crate::bvh::{self, BvhError};
+use crate::bvh::BvhError;
 use crate::clipfile;
 use crate::codec::CodecChoice;
 use crate::container::{assemble_version, HeaderWire};
@@ -23,7 +23,7 @@ use crate::located::LocatedError;
 use crate::motion::Motion;
 use crate::rig::{Rig, RigError};
 use crate::servo_clip::{self, ServoClipError, ServoEncodeOptions, ServoNames, ServoRate};
-use crate::units;
+use crate::units::{self, LengthUnit};
 use file::{ClipSpec, Mark, ShowSpec};
 use wire::TableRow;
 
@@ -45,6 +45,9 @@ pub enum ShowError {
     /// A clip's BVH file is wrong.
     #[error(transparent)]
     Bvh(#[from] BvhError),
+    /// A clip's AMC/ASF source is wrong (or has no skeleton beside it).
+    #[error(transparent)]
+    Input(#[from] crate::input::InputError),
     /// A clip's frames or loop points are out of its source.
     #[error("{file}: clip `{clip}`: {message}")]
     Range {
@@ -192,11 +195,17 @@ pub fn build(spec: &ShowSpec) -> Result<BuiltShow, ShowError> {
         .transpose()
         .map_err(ShowError::Rig)?;
     let mut sources: HashMap<PathBuf, Motion> = HashMap::new();
+    // The length unit a source declares (an ASF's), used unless the clip sets one.
+    let mut declared: HashMap<PathBuf, LengthUnit> = HashMap::new();
     let mut singles = Vec::new();
     let mut first: Option<(usize, Vec<String>, f64)> = None;
     for (k, c) in spec.clips.iter().enumerate() {
         if !sources.contains_key(&c.file) {
-            sources.insert(c.file.clone(), bvh::read_file(&c.file)?);
+            let input = crate::input::read_motion(&c.file, None)?;
+            if let Some(u) = input.unit {
+                declared.insert(c.file.clone(), u);
+            }
+            sources.insert(c.file.clone(), input.motion);
         }
         let m = &sources[&c.file];
         let range = cut_range(spec, c, m)?;
@@ -228,7 +237,15 @@ pub fn build(spec: &ShowSpec) -> Result<BuiltShow, ShowError> {
                 }
             }
         }
-        singles.push(encode_one(c, &cut, rig.as_ref(), range, m.frame_time)?);
+        let unit = declared.get(&c.file).copied();
+        singles.push(encode_one(
+            c,
+            &cut,
+            rig.as_ref(),
+            range,
+            m.frame_time,
+            unit,
+        )?);
     }
     assemble_show(spec, &singles)
 }
@@ -300,8 +317,9 @@ fn encode_one(
     rig: Option<&Rig>,
     range: (usize, usize),
     source_frame_time: f64,
+    declared: Option<LengthUnit>,
 ) -> Result<Single, ShowError> {
-    let unit = c.units.unwrap_or_else(|| units::detect(m));
+    let unit = c.units.or(declared).unwrap_or_else(|| units::detect(m));
     let file = c.file.display().to_string();
     if let Some(rig) = rig {
         let channels = rig

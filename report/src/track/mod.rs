@@ -56,6 +56,9 @@ pub enum TrackError {
     /// A BVH file does not parse (the error names the file).
     #[error(transparent)]
     Bvh(#[from] BvhError),
+    /// An AMC/ASF source does not read (the error names the file).
+    #[error(transparent)]
+    Input(#[from] mocap_encoder::input::InputError),
     /// No clips to draw.
     #[error("no clips")]
     NoClips,
@@ -335,13 +338,14 @@ pub fn separation_markdown(tracks: &[Track]) -> String {
     s
 }
 
-/// Reads a BVH file, or decodes a `.mcb` clip with the `no_std` decoder.
+/// Reads a BVH file or an AMC (with the `.asf` beside it), or decodes a
+/// `.mcb` clip with the `no_std` decoder.
 pub fn load(path: &Path) -> Result<Motion, TrackError> {
     let is_mcb = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcb"));
     if !is_mcb {
-        return Ok(mocap_encoder::bvh::read_file(path)?);
+        return Ok(mocap_encoder::input::read_motion(path, None)?.motion);
     }
     let bytes = std::fs::read(path).map_err(|source| TrackError::Read {
         path: path.to_path_buf(),
@@ -412,7 +416,7 @@ pub struct TrackReport {
 }
 
 fn expand(paths: &[PathBuf]) -> Result<Vec<PathBuf>, TrackError> {
-    mocap_encoder::bvh::expand(paths).map_err(TrackError::Folder)
+    mocap_encoder::input::expand(paths).map_err(TrackError::Folder)
 }
 
 /// `mocap track`: reads the clips, builds the reference space, places every

@@ -29,8 +29,9 @@ pub use servo::{load_servo, load_show, ServoPage, ServoSource};
 
 use std::path::{Path, PathBuf};
 
-use mocap_encoder::bvh::{self, BvhError};
+use mocap_encoder::bvh::BvhError;
 use mocap_encoder::clipfile::{self, SourceMismatch};
+use mocap_encoder::input::InputOptions;
 use mocap_encoder::metrics::{self, Metrics};
 use mocap_encoder::motion::Motion;
 use mocap_encoder::units::{self, LengthUnit};
@@ -58,6 +59,9 @@ pub enum ViewError {
     /// The BVH file does not parse (the error names the file).
     #[error(transparent)]
     Bvh(#[from] BvhError),
+    /// The source motion (BVH or ASF/AMC) does not read.
+    #[error(transparent)]
+    Input(#[from] mocap_encoder::input::InputError),
     /// The `.mcb` clip does not parse.
     #[error("{}: {source}", path.display())]
     Clip {
@@ -168,8 +172,23 @@ struct PageData<'a> {
 /// Reads `bvh` (units `unit`, or detected from its height), decodes `clip`
 /// against it when given, and builds the page.
 pub fn load(bvh: &Path, clip: Option<&Path>, unit: Option<LengthUnit>) -> Result<Page, ViewError> {
-    let m = bvh::read_file(bvh)?;
-    let unit = unit.unwrap_or_else(|| units::detect(&m));
+    load_with(bvh, clip, unit, &InputOptions::default())
+}
+
+/// [`load`] of any motion source ([`mocap_encoder::input`]: BVH, or AMC
+/// with its ASF as `input` says); units `unit`, else the one the source
+/// declares, else detected from its height.
+pub fn load_with(
+    bvh: &Path,
+    clip: Option<&Path>,
+    unit: Option<LengthUnit>,
+    input: &InputOptions,
+) -> Result<Page, ViewError> {
+    let read = mocap_encoder::input::read_motion_with(bvh, input)?;
+    let unit = unit
+        .or(read.unit)
+        .unwrap_or_else(|| units::detect(&read.motion));
+    let m = read.motion;
     let read = |path: &Path| {
         std::fs::read(path).map_err(|source| ViewError::Read {
             path: path.to_path_buf(),
