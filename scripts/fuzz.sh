@@ -84,7 +84,13 @@ failed=()
 for t in "${targets[@]}"; do
     tlog="../../$logs/$t.log"
     : >"$tlog"
-    if ! mocap_logged "$tlog" cargo +nightly fuzz build "$t"; then
+    # roundtrip runs the encoder's search on every input: without the comparison tracing of
+    # every f64 loop (more than half its time in __sanitizer_cov_trace_cmp8, perf) it runs ~5×
+    # faster (BENCHMARKS.md §4); parse_and_play keeps it (it guides the fuzzer through the
+    # parsers' magic values).
+    build_flags=()
+    [ "$t" = roundtrip ] && build_flags=(--no-trace-compares)
+    if ! mocap_logged "$tlog" cargo +nightly fuzz build "${build_flags[@]}" "$t"; then
         printf '%s: %s: FAILED to build (log: %s)\n' "$label" "$t" "$logs/$t.log"
         failed+=("$t")
         continue
@@ -92,7 +98,7 @@ for t in "${targets[@]}"; do
     extra=()
     [ "$t" = parse_and_play ] && extra=(-max_len=65536)
     rc=0
-    cargo +nightly fuzz run "$t" -- -max_total_time="$secs" "${extra[@]}" >>"$tlog" 2>&1 || rc=$?
+    cargo +nightly fuzz run "${build_flags[@]}" "$t" -- -max_total_time="$secs" "${extra[@]}" >>"$tlog" 2>&1 || rc=$?
     # libFuzzer: "#N DONE cov: C ft: F corp: K/S ..." and "Done N runs in S second(s)".
     stats="$(grep -E '^#[0-9]+' "$tlog" | tail -n1 | sed -E 's/^#([0-9]+)[[:space:]]+[A-Z]+[[:space:]]+/\1 /')"
     execs="${stats%% *}"
