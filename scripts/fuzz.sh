@@ -72,7 +72,7 @@ encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
     -o "$seeds/demo_servo_pred.mcb" --codec predictive --max-error 0.5deg
 
 # ---- seeds for roundtrip: the minimised corpus of the long runs (BENCHMARKS.md §4), committed as
-# decoder-nostd/fuzz/seeds/roundtrip.tar.gz (2 897 arbitrary motions, 617 KB unpacked); files the
+# decoder-nostd/fuzz/seeds/roundtrip.tar.gz (2 929 arbitrary motions, 2026-12-03); files the
 # fuzzer has added since stay.
 mkdir -p decoder-nostd/fuzz/corpus
 tar -xzf decoder-nostd/fuzz/seeds/roundtrip.tar.gz -C decoder-nostd/fuzz/corpus --keep-old-files 2>/dev/null || true
