@@ -34,7 +34,7 @@ mod reader;
 mod writer;
 
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::motion::{Motion, Skeleton};
 use lexer::Lexer;
@@ -103,25 +103,6 @@ pub fn parse_str(text: &str, file: &str) -> Result<Motion, BvhError> {
         frame_time,
         values,
     })
-}
-
-/// Expands folders into their `.bvh` files (sorted); files pass through.
-pub fn expand(paths: &[PathBuf]) -> std::io::Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
-    for p in paths {
-        if p.is_dir() {
-            let mut files: Vec<PathBuf> = std::fs::read_dir(p)
-                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display())))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|f| f.extension().is_some_and(|x| x.eq_ignore_ascii_case("bvh")))
-                .collect();
-            files.sort();
-            out.extend(files);
-        } else {
-            out.push(p.clone());
-        }
-    }
-    Ok(out)
 }
 
 #[cfg(test)]
