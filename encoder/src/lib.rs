@@ -3,13 +3,14 @@
 //! MCU runs. The `mocap` command line is the `mocap-cli` crate; nothing here
 //! parses arguments or prints errors — every area returns its typed error.
 //!
-//! Motion in and out: [`bvh`], [`motion`], [`units`], [`kinematics`],
+//! Motion in and out: [`bvh`], [`c3d`] (marker files, [`markers`]), [`motion`], [`units`], [`kinematics`],
 //! [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
 //! [`clipfile`], [`metrics`]. Servos: [`rig`], [`servo_clip`], [`play`].
 //! The reports over them (bench, plots, Motion Track) are the
 //! `mocap-report` crate.
 
 pub mod bvh;
+pub mod c3d;
 pub mod clipfile;
 pub mod codec;
 pub mod container;
@@ -18,6 +19,7 @@ pub mod fixed;
 pub mod generate;
 pub mod kinematics;
 pub mod located;
+pub mod markers;
 pub mod metrics;
 pub mod motion;
 pub mod play;
