@@ -1,5 +1,6 @@
 //! `mocap eval`: decode a clip with the `no_std` decoder and measure it
-//! against its source BVH (text or JSON; `--plot` the per-frame error).
+//! against its source BVH (text or JSON; `--plot` the per-frame error), or
+//! a marker clip against its C3D file ([`super::markers::eval`]).
 
 use std::path::PathBuf;
 
@@ -10,7 +11,7 @@ use super::{parse_clip, read_clip, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The source BVH.
+    /// The source BVH (or C3D marker file, `.c3d`).
     input: PathBuf,
     /// The clip.
     clip: PathBuf,
@@ -26,6 +27,12 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> super::Result {
+    if super::markers::is_marker_file(&a.input) {
+        if a.plot.is_some() {
+            return Err("--plot is not drawn for marker clips yet".into());
+        }
+        return super::markers::eval(&a.input, &a.clip, &a.units, a.json);
+    }
     let m = bvh::read_file(&a.input)?;
     let unit = a.units.resolve(&m);
     let bytes = read_clip(&a.clip)?;
