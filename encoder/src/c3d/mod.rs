@@ -349,12 +349,24 @@ pub fn parse(data: &[u8], file: &str) -> Result<C3d, C3dError> {
     let word = if float { 4 } else { 2 };
     let frame_bytes = (points * 4 + h_analog) * word;
     let data_at = (data_block - 1) * BLOCK;
+    // Every frame must be in the file (before anything is allocated for them).
+    if let Some(whole) = data.len().saturating_sub(data_at).checked_div(frame_bytes) {
+        if whole < frames {
+            let at = data_at + whole * frame_bytes;
+            return Err(b.err(
+                at,
+                format!(
+                    "file ends inside frame {} of {frames} ({frame_bytes} bytes at byte {at}, the file has {})",
+                    whole + 1,
+                    data.len()
+                ),
+            ));
+        }
+    }
     let mut positions = Vec::with_capacity(frames * points);
     let mut missing = Vec::with_capacity(frames * points);
     for f in 0..frames {
         let at = data_at + f * frame_bytes;
-        // The whole frame, or the error says which frame is cut.
-        b.take_named(at, frame_bytes, || format!("frame {} of {frames}", f + 1))?;
         for p in 0..points {
             let at = at + p * 4 * word;
             let (xyz, gone) = if float {

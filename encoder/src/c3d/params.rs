@@ -22,6 +22,8 @@ pub(super) struct Param {
     pub kind: i8,
     /// Dimensions (empty: a scalar).
     pub dims: Vec<usize>,
+    /// Elements: the product of the dimensions (1 for a scalar), checked.
+    elements: usize,
     /// Offset of the first data byte.
     pub data_at: usize,
     /// Offset of the record (for errors).
@@ -31,7 +33,7 @@ pub(super) struct Param {
 impl Param {
     /// Elements (product of the dimensions; 1 for a scalar).
     pub fn elements(&self) -> usize {
-        self.dims.iter().product()
+        self.elements
     }
 
     /// Bytes per element.
@@ -91,11 +93,22 @@ impl Params {
                     .iter()
                     .map(|&d| usize::from(d))
                     .collect();
+                let elements = dims
+                    .iter()
+                    .try_fold(1usize, |a, &d| a.checked_mul(d))
+                    .filter(|&n| n <= b.data.len())
+                    .ok_or_else(|| {
+                        b.err(
+                            kind_at + 1,
+                            format!("parameter '{name}' has dimensions {dims:?}: more elements than the file has bytes"),
+                        )
+                    })?;
                 let p = Param {
                     group: id.unsigned_abs(),
                     name,
                     kind,
                     dims,
+                    elements,
                     data_at: kind_at + 2 + ndims,
                     record_at: at,
                 };
@@ -204,7 +217,10 @@ impl Params {
         }
         let (len, count) = match p.dims.split_first() {
             None => (1, 1),
-            Some((&len, rest)) => (len, rest.iter().product()),
+            // Strings of no characters: none (their count could be anything).
+            Some((0, _)) => (0, 0),
+            // `len · count` elements are in the file (checked when parsed).
+            Some((&len, _)) => (len, p.elements() / len),
         };
         let mut out = Vec::with_capacity(count);
         for i in 0..count {

@@ -472,3 +472,68 @@ fn reads_the_corpus_shapes_when_counts_are_large() {
     assert!(e.message.contains("frame 3 of 3"), "{e}");
     assert_eq!(e.offset, Some(s.point_at(2, 0)));
 }
+
+/// A file read in the wrong encoding: Intel and MIPS swapped break the
+/// parameter records' offsets (an error with its offset); DEC read as Intel
+/// or the other way gives other numbers or an error — never a panic, never
+/// the same read.
+#[test]
+fn wrong_encodings_are_caught() {
+    let processor_at = 512 + 3;
+    for (from, to) in [
+        (Processor::Intel, Processor::Mips),
+        (Processor::Mips, Processor::Intel),
+        (Processor::Dec, Processor::Mips),
+    ] {
+        let s = Spec::new(from, true);
+        let e = patched(&s, |b| b[processor_at] = to.code());
+        assert!(e.offset.is_some(), "{from:?} as {to:?}: {e}");
+    }
+    for (from, to) in [
+        (Processor::Intel, Processor::Dec),
+        (Processor::Dec, Processor::Intel),
+    ] {
+        for float in [false, true] {
+            let s = Spec::new(from, float);
+            let mut b = s.write();
+            b[processor_at] = to.code();
+            match parse(&b, "t.c3d") {
+                Ok(c) => assert_ne!(Some(c), read(&s).ok(), "{from:?} as {to:?}"),
+                Err(e) => assert!(e.offset.is_some(), "{e}"),
+            }
+        }
+    }
+}
+
+/// Every byte of a file set to 0x00, 0x7f, 0x80 and 0xff in turn: the reader
+/// reads it or says where it breaks, never panics.
+#[test]
+fn every_byte_changed_reads_or_errs_with_offset() {
+    for processor in ALL {
+        let s = Spec::new(processor, processor != Processor::Dec);
+        let bytes = s.write();
+        for i in 0..bytes.len() {
+            for v in [0x00, 0x7f, 0x80, 0xff] {
+                let mut b = bytes.clone();
+                b[i] = v;
+                if let Err(e) = parse(&b, "t.c3d") {
+                    assert!(e.offset.is_some_and(|o| o < b.len()), "{i} = {v:#x}: {e}");
+                }
+            }
+        }
+    }
+}
+
+/// A header that claims 65 535 frames the file does not hold: an error at the
+/// first missing frame, before anything is allocated for them.
+#[test]
+fn claimed_frames_past_the_file() {
+    let mut s = Spec::new(Processor::Intel, false);
+    s.frames_param = Some(0xffff);
+    let e = patched(&s, |b| b[8..10].copy_from_slice(&0xffffu16.to_le_bytes()));
+    assert_eq!(e.offset, Some(s.point_at(7, 0)));
+    assert!(
+        e.message.contains("file ends inside frame 8 of 65535"),
+        "{e}"
+    );
+}
