@@ -495,3 +495,101 @@ fn encode_and_eval_an_amc() {
         text(&o.stderr)
     );
 }
+
+/// A tiny Intel C3D file (integer data, scale 0.1 mm, 100 Hz): markers
+/// `LHEE` and `RHEE` over four frames, `RHEE` missing at frame 2.
+fn tiny_c3d() -> Vec<u8> {
+    let u16s = |b: &mut Vec<u8>, v: &[u16]| v.iter().for_each(|x| b.extend(x.to_le_bytes()));
+    let mut b = vec![2u8, 0x50];
+    u16s(&mut b, &[2, 0, 1, 4, 0]);
+    b.extend(0.1f32.to_le_bytes());
+    u16s(&mut b, &[3, 0]);
+    b.extend(100f32.to_le_bytes());
+    b.resize(512, 0);
+    b.extend([1, 0x50, 1, 84]);
+    // Group POINT (id 1), then its parameters; each record's next offset
+    // counts from the offset word.
+    b.extend([5, 0xff]);
+    b.extend(b"POINT");
+    b.extend([3, 0, 0]);
+    let mut param = |name: &str, kind: i8, dims: &[u8], data: &[u8], last: bool| {
+        b.extend([name.len() as u8, 1]);
+        b.extend(name.as_bytes());
+        let next = if last { 0 } else { 5 + dims.len() + data.len() } as u16;
+        b.extend(next.to_le_bytes());
+        b.extend([kind as u8, dims.len() as u8]);
+        b.extend(dims);
+        b.extend(data);
+        b.push(0);
+    };
+    param("USED", 2, &[], &2u16.to_le_bytes(), false);
+    param("SCALE", 4, &[], &0.1f32.to_le_bytes(), false);
+    param("RATE", 4, &[], &100f32.to_le_bytes(), false);
+    param("LABELS", -1, &[4, 2], b"LHEERHEE", false);
+    param("UNITS", -1, &[2], b"mm", true);
+    b.resize(1024, 0);
+    for f in 0..4i16 {
+        for p in 0..2i16 {
+            let residual = if p == 1 && f == 2 { -1 } else { 0x0102 };
+            for v in [1000 + 10 * f, 2000 * p, 900 - 5 * f, residual] {
+                b.extend(v.to_le_bytes());
+            }
+        }
+    }
+    b
+}
+
+#[test]
+fn encode_info_eval_a_c3d_marker_file() {
+    let d = out_dir("c3d");
+    let c3d = d.join("tiny.c3d");
+    std::fs::write(&c3d, tiny_c3d()).expect("write");
+    let (c3d, clip) = (c3d.to_str().unwrap(), d.join("tiny.mcb"));
+    let clip = clip.to_str().unwrap();
+    let o = mocap(&["encode", c3d, "-o", clip, "--max-error", "2mm"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(out.contains("1 missing samples flagged"), "{out}");
+    assert!(
+        text(&o.stderr).contains(
+            "4 frames × 2 markers at 100 Hz, units mm (POINT:UNITS 'mm'), 1 samples missing"
+        ),
+        "{}",
+        text(&o.stderr)
+    );
+    let o = mocap(&["info", clip, "--channels"]);
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("missing samples: 1 of 8 (12.5 %) in 1 runs"),
+        "{out}"
+    );
+    assert!(out.contains("  RHEE: frames 2\n"), "{out}");
+    assert!(out.contains("section 0x81: 6 bytes"), "{out}");
+    let o = mocap(&["eval", c3d, clip]);
+    let out = text(&o.stdout);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(out.contains("present samples     7"), "{out}");
+    assert!(
+        out.contains("missing samples     1 (12.5 %) in 1 runs: the clip flags exactly these"),
+        "{out}"
+    );
+    let o = mocap(&["eval", c3d, clip, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert!(v["max_mm"].as_f64().unwrap() <= 2.0);
+    assert_eq!(v["mask_matches"], true);
+    // An angle bound means nothing for markers; a cut file names its offset.
+    let o = mocap(&["encode", c3d, "-o", clip, "--max-error", "1deg"]);
+    assert!(text(&o.stderr).contains("a marker clip has no rotation channels"));
+    let cut = d.join("cut.c3d");
+    std::fs::write(&cut, &tiny_c3d()[..1070]).expect("write");
+    let o = mocap(&["encode", cut.to_str().unwrap(), "-o", clip]);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(
+        err.starts_with(&format!(
+            "mocap: error: {}: byte 1056: file ends inside frame 3 of 4",
+            cut.display()
+        )),
+        "{err}"
+    );
+}

@@ -4,6 +4,7 @@ use crate::codec::{open_codec, Codec};
 use crate::consts::{self, CRC_LEN, MAX_SECTIONS, PREAMBLE_LEN, SECTION_ENTRY_LEN};
 use crate::error::Error;
 use crate::header::Header;
+use crate::missing::{self, Missing};
 use crate::reader::Reader;
 use crate::rig::Rig;
 use crate::wire;
@@ -111,6 +112,8 @@ pub struct Clip<'a> {
     header: Header<'a>,
     codec_id: u8,
     rig: Option<Rig<'a>>,
+    /// The missing-sample mask (§3.7), validated here.
+    missing: Option<Missing<'a>>,
     /// The codec section, validated once here for every player.
     codec: Codec<'a>,
 }
@@ -126,6 +129,7 @@ impl<'a> Clip<'a> {
         let mut header = None;
         let mut codec = None;
         let mut rig = None;
+        let mut mask = None;
         for _ in 0..count {
             let at = table_at.wrapping_add(r.pos());
             let id = bytes.get(at).copied().unwrap_or(0);
@@ -159,6 +163,7 @@ impl<'a> Clip<'a> {
                     codec = Some((id, payload));
                 }
                 consts::SECTION_RIG => rig = Some(payload),
+                consts::SECTION_MISSING => mask = Some(payload),
                 0x80..=0xFF => {} // ancillary: skipped by this decoder
                 _ => return Err(Error::ContainerUnknownSection { id }),
             }
@@ -178,6 +183,9 @@ impl<'a> Clip<'a> {
         let rig = rig
             .map(|r| Rig::parse(r, header.channel_count()))
             .transpose()?;
+        let missing = mask
+            .map(|m| missing::parse(m, header.joint_count(), header.frame_count()))
+            .transpose()?;
         // Validate the codec section now so that playing never meets a
         // structural error later.
         let codec = open_codec(
@@ -192,6 +200,7 @@ impl<'a> Clip<'a> {
             header,
             codec_id,
             rig,
+            missing,
             codec,
         })
     }
@@ -212,6 +221,7 @@ impl<'a> Clip<'a> {
             header,
             codec_id,
             rig,
+            missing: None,
             codec,
         }
     }
@@ -242,6 +252,14 @@ impl<'a> Clip<'a> {
             .find(|s| s.id == consts::SECTION_RIG_DIGEST)?;
         let bytes: [u8; 4] = section.bytes.try_into().ok()?;
         Some(u32::from_le_bytes(bytes))
+    }
+
+    /// The missing samples of a marker clip (SPEC.md §3.7, the ancillary
+    /// section `0x81`), validated by [`Clip::parse`]: `None` when the clip
+    /// has no such section (nothing missing, or encoded before §3.7). The
+    /// decoded frames hold the encoder's fill at those samples.
+    pub fn missing(&self) -> Option<Missing<'a>> {
+        self.missing
     }
 
     /// Id of the codec section (SPEC.md §2.2).

@@ -43,6 +43,9 @@ pub const SECTION_RIG: u8 = 0x03;
 pub const SECTION_CODEC_INDEX: u8 = 0x10;
 /// Rig digest (§3.6): ancillary, the digest of the rig a servo clip was encoded for.
 pub const SECTION_RIG_DIGEST: u8 = 0x80;
+/// Missing samples (§3.7): ancillary, which samples of a marker clip the
+/// capture did not have.
+pub const SECTION_MISSING: u8 = 0x81;
 /// Section id of the `pca-spline` codec payload, §5.
 pub const SECTION_CODEC_PCA_SPLINE: u8 = 0x11;
 /// Section id of the `predictive` codec payload, §5b.

@@ -117,6 +117,39 @@ pub enum Error {
         /// Which rule of §3.5 is broken.
         rule: &'static str,
     },
+    /// The missing-sample section ends early or holds a malformed varint
+    /// (§3.7).
+    MissingMalformed {
+        /// Byte offset inside the section.
+        offset: usize,
+    },
+    /// The missing-sample section's marker count is not the header's joint
+    /// count (§3.7).
+    MissingMarkerCount {
+        /// Markers in the section.
+        markers: u32,
+        /// Joints in the header.
+        joints: u32,
+    },
+    /// A marker's runs do not add up to the frame count (§3.7).
+    MissingRunTotal {
+        /// The marker (joint index).
+        marker: u32,
+        /// The header's frame count.
+        frames: u32,
+    },
+    /// A run other than a marker's first has length 0 (§3.7).
+    MissingEmptyRun {
+        /// The marker (joint index).
+        marker: u32,
+        /// The run's index among the marker's runs.
+        run: u32,
+    },
+    /// Bytes remain after the last marker's runs (§3.7).
+    MissingTrailingBytes {
+        /// Byte offset inside the section.
+        offset: usize,
+    },
     /// The index codec section is malformed (§4).
     IndexMalformed {
         /// Which rule of §4 is broken.
@@ -256,6 +289,26 @@ impl fmt::Display for Error {
             Error::HeaderRange { channel } => write!(f, "channel {channel} has min > max"),
             Error::HeaderTrailingBytes => f.write_str("bytes after the end of the header"),
             Error::RigMalformed { rule } => write!(f, "rig table: {rule}"),
+            Error::MissingMalformed { offset } => {
+                write!(f, "missing samples: malformed at byte {offset}")
+            }
+            Error::MissingMarkerCount { markers, joints } => write!(
+                f,
+                "missing samples: {markers} markers, the header has {joints} joints"
+            ),
+            Error::MissingRunTotal { marker, frames } => write!(
+                f,
+                "missing samples: the runs of marker {marker} do not add up to {frames} frames"
+            ),
+            Error::MissingEmptyRun { marker, run } => {
+                write!(f, "missing samples: run {run} of marker {marker} is empty")
+            }
+            Error::MissingTrailingBytes { offset } => {
+                write!(
+                    f,
+                    "missing samples: bytes after the last marker at byte {offset}"
+                )
+            }
             Error::IndexMalformed { rule } => write!(f, "index codec: {rule}"),
             Error::IndexDescriptor { channel } => {
                 write!(f, "index codec: invalid descriptor for channel {channel}")

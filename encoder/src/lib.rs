@@ -4,13 +4,15 @@
 //! parses arguments or prints errors — every area returns its typed error.
 //!
 //! Motion in and out: [`input`] (one entry point: BVH or ASF/AMC), [`bvh`],
-//! [`asf`], [`motion`], [`units`], [`kinematics`], [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
+//! [`asf`], [`c3d`] (marker files, [`markers`]), [`motion`], [`units`],
+//! [`kinematics`], [`fixed`], [`generate`]. Coding: [`codec`], [`encode`], [`container`],
 //! [`clipfile`], [`metrics`]. Servos: [`rig`], [`servo_clip`], [`play`].
 //! The reports over them (bench, plots, Motion Track) are the
 //! `mocap-report` crate.
 
 pub mod asf;
 pub mod bvh;
+pub mod c3d;
 pub mod clipfile;
 pub mod codec;
 pub mod container;
@@ -20,6 +22,7 @@ pub mod generate;
 pub mod input;
 pub mod kinematics;
 pub mod located;
+pub mod markers;
 pub mod metrics;
 pub mod motion;
 pub mod play;

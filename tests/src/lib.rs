@@ -41,10 +41,16 @@ fn corpus_folder(folder: &str) -> Option<(PathBuf, std::fs::ReadDir)> {
 /// The `.bvh` files of one corpus folder (`cmu`, `iclone-cmu`), sorted, or
 /// `None` after printing a visible SKIPPED line when the corpus is absent.
 pub fn corpus_files(folder: &str) -> Option<Vec<PathBuf>> {
+    corpus_files_ext(folder, "bvh")
+}
+
+/// The files of one corpus folder with extension `ext` (`c3d/`: `c3d`),
+/// sorted, or `None` with the visible skip of [`corpus_files`].
+pub fn corpus_files_ext(folder: &str, ext: &str) -> Option<Vec<PathBuf>> {
     let (_, rd) = corpus_folder(folder)?;
     let mut files: Vec<PathBuf> = rd
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "bvh"))
+        .filter(|p| p.extension().is_some_and(|x| x == ext))
         .collect();
     files.sort();
     Some(files)

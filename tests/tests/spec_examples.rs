@@ -595,3 +595,127 @@ fn worked_numbers_of_the_prose() {
         ]
     );
 }
+
+/// §3.7: the mask of the example is what the encoder writes as a marker clip's last section;
+/// `Clip::missing` reads it back; a clip without it parses and has none; each rule of §3.7
+/// has its error.
+#[test]
+fn missing_samples_example() {
+    use mocap_encoder::container::assemble;
+    use mocap_encoder::markers::{encode_markers, MarkerClip, MissingMask};
+    use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
+
+    let section = spec_bytes("missing-samples");
+    let mut mask = MissingMask::none(6, 3);
+    for f in [0, 1, 4] {
+        mask.missing[f * 3 + 1] = true;
+    }
+    mask.missing[5 * 3 + 2] = true;
+    assert_eq!(mask.to_section(), section);
+
+    // Three markers, six frames, in mm; 0 at the missing samples (as the C3D reader gives them).
+    let joint = |name: &str| Joint {
+        name: name.into(),
+        parent: None,
+        offset: [0.0; 3],
+        channels: vec![
+            ChannelKind::Xposition,
+            ChannelKind::Yposition,
+            ChannelKind::Zposition,
+        ],
+        end_site: false,
+    };
+    let mut values = Vec::new();
+    for f in 0..6 {
+        for k in 0..3 {
+            let v = [10.0 * f as f64, 100.0 * k as f64, 1000.0];
+            values.extend(if mask.is_missing(f, k) { [0.0; 3] } else { v });
+        }
+    }
+    let clip = MarkerClip {
+        motion: Motion {
+            skeleton: Skeleton {
+                joints: vec![joint("A"), joint("B"), joint("C")],
+            },
+            frame_time: 0.01,
+            values,
+        },
+        missing: mask.clone(),
+        unit: mocap_encoder::units::LengthUnit::Mm,
+    };
+    let opts = mocap_encoder::encode::EncodeOptions {
+        codec: mocap_encoder::encode::CodecChoice::Index,
+        bound: mocap_encoder::encode::Bound {
+            angle_deg: None,
+            position_mm: Some(1.0),
+            arms_mm: None,
+        },
+        metres_per_unit: 1e-3,
+        key_interval: None,
+    };
+    let enc = encode_markers(&clip, &opts).unwrap();
+    assert!(enc.error.max_mm <= 1.0);
+    assert_eq!((enc.error.present, enc.error.missing), (14, 4));
+    let parsed = Clip::parse(&enc.encoded.bytes).unwrap();
+    let last = parsed.sections().last().unwrap();
+    assert_eq!((last.id, last.bytes), (0x81, section.as_slice()));
+    let m = parsed.missing().unwrap();
+    assert_eq!(
+        (m.markers(), m.frames(), m.count(), m.run_count()),
+        (3, 6, 4, 3)
+    );
+    assert_eq!(m.runs(1).collect::<Vec<_>>(), [(0, 2), (4, 1)]);
+    assert_eq!(m.runs(2).collect::<Vec<_>>(), [(5, 1)]);
+    for f in 0..6 {
+        for k in 0..3 {
+            assert_eq!(m.is_missing(f, k), mask.is_missing(f as usize, k as usize));
+        }
+    }
+    assert_eq!(MissingMask::of_clip(&parsed), Some(mask));
+
+    // Without it (as before §3.7) the clip parses and has no mask.
+    let others: Vec<(u8, Vec<u8>)> = parsed
+        .sections()
+        .filter(|s| s.id != 0x81)
+        .map(|s| (s.id, s.bytes.to_vec()))
+        .collect();
+    assert!(Clip::parse(&assemble(&others)).unwrap().missing().is_none());
+    // Each rule.
+    let with = |bytes: &[u8]| {
+        let mut s = others.clone();
+        s.push((0x81, bytes.to_vec()));
+        Clip::parse(&assemble(&s)).err()
+    };
+    assert_eq!(
+        with(&[0x02, 0x00, 0x00]),
+        Some(Error::MissingMarkerCount {
+            markers: 2,
+            joints: 3
+        })
+    );
+    let mut empty = section.clone();
+    empty[7] = 0; // marker 1's fifth run (present 1) → 0
+    assert_eq!(
+        with(&empty),
+        Some(Error::MissingEmptyRun { marker: 1, run: 4 })
+    );
+    let mut long = section.clone();
+    long[5] = 3; // marker 1's third run (present 2) → 3: its runs add up to 7
+    assert_eq!(
+        with(&long),
+        Some(Error::MissingRunTotal {
+            marker: 1,
+            frames: 6
+        })
+    );
+    let mut trailing = section.clone();
+    trailing.push(0);
+    assert_eq!(
+        with(&trailing),
+        Some(Error::MissingTrailingBytes { offset: 11 })
+    );
+    assert_eq!(
+        with(&section[..5]),
+        Some(Error::MissingMalformed { offset: 5 })
+    );
+}

@@ -1,5 +1,6 @@
 //! `mocap encode`: a BVH file into a `.mcb` clip (or, with `--rig`, a servo
-//! clip), the bound proven by decoding; `--emit` also writes it as source.
+//! clip; a `.c3d` marker file into a marker clip, [`super::markers`]), the
+//! bound proven by decoding; `--emit` also writes it as source.
 
 use std::path::{Path, PathBuf};
 
@@ -13,8 +14,8 @@ use super::{write, CodecArg, MotionArgs, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input motion: a BVH file, or an AMC file with its ASF skeleton
-    /// (`--skeleton`, or the `.asf` beside it).
+    /// Input motion: a BVH file, an AMC file with its ASF skeleton
+    /// (`--skeleton`, or the `.asf` beside it), or a C3D marker file (`.c3d`).
     input: PathBuf,
     #[command(flatten)]
     motion: MotionArgs,
@@ -25,16 +26,18 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "mcu")]
     target: Target,
     /// Codec (default: `index` for motion clips — the cheapest to decode —
-    /// and `predictive` for servo clips — the smallest).
+    /// and `predictive` for servo and marker clips — the smallest).
     #[arg(long, value_enum)]
     codec: Option<CodecArg>,
     /// Error bound, repeatable: `1deg` (rotation channels), `8mm` (max
     /// joint position error by forward kinematics), `arms:10mm` (mean
-    /// RMS joint error); `+` joins several in one value.
-    #[arg(long = "max-error", default_value = "1deg", value_parser = parse_bounds)]
+    /// RMS joint error); `+` joins several in one value. Default: `1deg`;
+    /// a C3D marker file takes lengths only (the marker position error),
+    /// default `1mm`.
+    #[arg(long = "max-error", value_parser = parse_bounds)]
     max_error: Vec<Vec<BoundSpec>>,
-    /// Length unit of the input (auto: the ASF's declared unit, else from
-    /// the skeleton's height).
+    /// Length unit of the input (auto: the ASF's declared unit or a C3D
+    /// file's POINT:UNITS, else from the skeleton's height).
     #[arg(long, default_value = "auto")]
     units: UnitArg,
     /// Force the key-frame interval of the index codec (0 = none), or the
@@ -99,10 +102,18 @@ fn parse_bounds(s: &str) -> Result<Vec<BoundSpec>, encode::BoundError> {
 
 pub fn run(a: Args) -> super::Result {
     let Target::Mcu = a.target;
+    let specs = a.max_error.concat();
+    if super::markers::is_marker_file(&a.input) {
+        return encode_markers(&a, &specs);
+    }
     let input = a.motion.read(&a.input)?;
     let unit = a.units.resolve(&input);
     let m = input.motion;
-    let bound = Bound::from_specs(&a.max_error.concat());
+    let bound = if specs.is_empty() {
+        Bound::from_specs(&[BoundSpec::Degrees(1.0)])
+    } else {
+        Bound::from_specs(&specs)
+    };
     if let Some(rig_path) = &a.rig {
         let opts = servo_clip::ServoEncodeOptions {
             codec: a.codec.map_or(CodecChoice::Predictive, Into::into),
@@ -156,6 +167,25 @@ pub fn run(a: Args) -> super::Result {
     );
     if let Some(kind) = a.emit {
         let p = emit_source(kind, &a.output, &enc.bytes)?;
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+/// `mocap encode markers.c3d`: a marker clip (no rig: a marker file has no
+/// skeleton to drive one).
+fn encode_markers(a: &Args, specs: &[BoundSpec]) -> super::Result {
+    if a.rig.is_some() {
+        return Err("--rig needs a skeleton: a C3D marker file has none".into());
+    }
+    // The smallest clips, and the one codec whose 12-bit-free residuals meet
+    // the default 1 mm over metres of walking (`index` stops near 2 mm there).
+    let codec = a.codec.map_or(CodecChoice::Predictive, Into::into);
+    let bytes = super::markers::encode(&a.input, &a.units, specs, codec, a.key_interval)?;
+    write(&a.output, &bytes)?;
+    println!("wrote {}", a.output.display());
+    if let Some(kind) = a.emit {
+        let p = emit_source(kind, &a.output, &bytes)?;
         eprintln!("wrote {}", p.display());
     }
     Ok(())

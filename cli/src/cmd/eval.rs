@@ -1,5 +1,6 @@
 //! `mocap eval`: decode a clip with the `no_std` decoder and measure it
-//! against its source BVH (text or JSON; `--plot` the per-frame error).
+//! against its source BVH (text or JSON; `--plot` the per-frame error), or
+//! a marker clip against its C3D file ([`super::markers::eval`]).
 
 use std::path::PathBuf;
 
@@ -10,8 +11,8 @@ use super::{parse_clip, read_clip, MotionArgs, UnitArg};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The source motion: BVH, or AMC with its ASF (`--skeleton`, or the
-    /// `.asf` beside it).
+    /// The source motion: BVH, AMC with its ASF (`--skeleton`, or the
+    /// `.asf` beside it), or a C3D marker file (`.c3d`).
     input: PathBuf,
     /// The clip.
     clip: PathBuf,
@@ -29,6 +30,12 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> super::Result {
+    if super::markers::is_marker_file(&a.input) {
+        if a.plot.is_some() {
+            return Err("--plot is not drawn for marker clips yet".into());
+        }
+        return super::markers::eval(&a.input, &a.clip, &a.units, a.json);
+    }
     let input = a.motion.read(&a.input)?;
     let unit = a.units.resolve(&input);
     let m = input.motion;

@@ -56,10 +56,41 @@ fn info_text(clip: &Clip<'_>, list_channels: bool) -> String {
             None => "rig digest: none (encoded before SPEC.md §3.6: only the rig table identifies the rig)\n".to_string(),
         };
     }
+    if let Some(m) = clip.missing() {
+        s += &missing_text(clip, &m, list_channels);
+    }
     for sec in clip.sections() {
         s += &format!("section {:#04x}: {} bytes\n", sec.id, sec.bytes.len());
         if let Some(text) = codec::describe_section(sec.id, sec.bytes, h, list_channels) {
             s += &text;
+        }
+    }
+    s
+}
+
+/// The missing samples of a marker clip (SPEC.md §3.7): count and runs; with
+/// `--channels` each marker's runs.
+fn missing_text(clip: &Clip<'_>, m: &mocap_decoder::Missing<'_>, per_marker: bool) -> String {
+    let samples = u64::from(m.frames()) * u64::from(m.markers());
+    let mut s = format!(
+        "missing samples: {} of {} ({:.1} %) in {} runs (SPEC.md §3.7; the decoded frames hold the encoder's fill there)\n",
+        m.count(),
+        samples,
+        100.0 * f64::from(m.count()) / samples.max(1) as f64,
+        m.run_count()
+    );
+    let names: Vec<&str> = clip.header().joints().map(|j| j.name).collect();
+    for k in 0..m.markers() {
+        let runs: Vec<String> = m
+            .runs(k)
+            .map(|(start, len)| match len {
+                1 => format!("{start}"),
+                _ => format!("{start}–{}", start + len - 1),
+            })
+            .collect();
+        if per_marker && !runs.is_empty() {
+            let name = names.get(k as usize).copied().unwrap_or("");
+            s += &format!("  {name}: frames {}\n", runs.join(", "));
         }
     }
     s

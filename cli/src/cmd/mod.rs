@@ -9,6 +9,7 @@ pub mod encode;
 pub mod eval;
 pub mod generate;
 pub mod info;
+pub mod markers;
 pub mod play;
 pub mod send;
 pub mod show;
