@@ -565,6 +565,13 @@ fn encode_info_eval_a_c3d_marker_file() {
     );
     assert!(out.contains("  RHEE: frames 2\n"), "{out}");
     assert!(out.contains("section 0x81: 6 bytes"), "{out}");
+    // The view page: both markers, the missing sample flagged (frame 2,
+    // joint 1 of 2: bit 5 of the bitmap, base64 "IA=="), not drawn as data.
+    let page = d.join("tiny.html");
+    let o = mocap(&["view", c3d, clip, "-o", page.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let html = std::fs::read_to_string(&page).expect("page");
+    assert!(html.contains(r#""missing":"IA==","missingCount":1"#), "{html}");
     let o = mocap(&["eval", c3d, clip]);
     let out = text(&o.stdout);
     assert!(o.status.success(), "{}", text(&o.stderr));

@@ -164,3 +164,48 @@ pub fn eval(input: &Path, clip_path: &Path, units: &UnitArg, json: bool) -> supe
     );
     Ok(())
 }
+
+/// The `mocap view` page of a C3D file and, optionally, its clip: the
+/// filled markers (the clip's source), missing samples drawn hollow.
+pub fn view(
+    input: &Path,
+    clip_path: Option<&Path>,
+    units: &UnitArg,
+) -> super::Result<mocap_report::view::Page> {
+    let (clip, unit) = read(input, units)?;
+    let filled = markers::fill(&clip.motion, &clip.missing);
+    let decoded = match clip_path {
+        Some(path) => {
+            let bytes = read_clip(path)?;
+            let parsed = parse_clip(path, &bytes)?;
+            let back = clipfile::decode_against(&parsed, &filled, unit.metres()).map_err(|e| {
+                format!(
+                    "{} does not play against {}: {e}",
+                    path.display(),
+                    input.display()
+                )
+            })?;
+            Some((back, bytes.len()))
+        }
+        None => None,
+    };
+    let name = |p: &Path| {
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
+    };
+    let (source, clip_name) = (name(input), clip_path.map(name));
+    let names = mocap_report::view::Names {
+        source: &source,
+        clip: clip_name.as_deref(),
+        source_bytes: std::fs::metadata(input).map_or(0, |m| m.len() as usize),
+    };
+    Ok(mocap_report::view::page_with_missing(
+        &filled,
+        unit,
+        decoded.as_ref().map(|(b, n)| (b, *n)),
+        &names,
+        Some(&clip.missing),
+    )?)
+}

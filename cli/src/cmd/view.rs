@@ -91,7 +91,11 @@ pub fn run(a: Args) -> super::Result {
         }
         return Ok(());
     }
-    let page = view::load_with(&a.input, a.clip.as_deref(), unit, &a.motion.options())?;
+    let page = if super::markers::is_marker_file(&a.input) {
+        super::markers::view(&a.input, a.clip.as_deref(), &a.units)?
+    } else {
+        view::load_with(&a.input, a.clip.as_deref(), unit, &a.motion.options())?
+    };
     write(&out, page.html.as_bytes())?;
     eprintln!(
         "wrote {} ({} bytes; {} frames × {} joints, positions to {} mm)",

@@ -29,6 +29,7 @@ pub use servo::{load_servo, load_show, ServoPage, ServoSource};
 
 use std::path::{Path, PathBuf};
 
+use base64::Engine as _;
 use mocap_encoder::bvh::BvhError;
 use mocap_encoder::clipfile::{self, SourceMismatch};
 use mocap_encoder::input::InputOptions;
@@ -167,6 +168,11 @@ struct PageData<'a> {
     errors: Option<&'a str>,
     worst_frame: Option<usize>,
     metrics: Option<&'a Metrics>,
+    /// Marker clips: one bit per (frame, joint), frame-major, LSB first,
+    /// base64 — the samples the source does not have (drawn hollow, never
+    /// as data: the positions there are the encoder's fill).
+    missing: Option<String>,
+    missing_count: usize,
 }
 
 /// Reads `bvh` (units `unit`, or detected from its height), decodes `clip`
@@ -252,6 +258,20 @@ pub fn page(
     decoded: Option<(&Motion, usize)>,
     names: &Names<'_>,
 ) -> Result<Page, ViewError> {
+    page_with_missing(original, unit, decoded, names, None)
+}
+
+/// [`page`] of a marker clip: `original` is the filled motion
+/// ([`mocap_encoder::markers::fill`]) and `missing` says which of its
+/// samples the source lacks; the page draws those hollow and leaves out
+/// the bones to them, so no invented sample passes for data.
+pub fn page_with_missing(
+    original: &Motion,
+    unit: LengthUnit,
+    decoded: Option<(&Motion, usize)>,
+    names: &Names<'_>,
+    missing: Option<&mocap_encoder::markers::MissingMask>,
+) -> Result<Page, ViewError> {
     let frames = original.frames();
     let joints = original.skeleton.joints.len();
     let name = || names.source.to_string();
@@ -296,6 +316,19 @@ pub fn page(
         errors: packed_errors.as_ref().map(|e| e.1.as_str()),
         worst_frame: metrics.as_ref().map(|m| m.max_joint_err_frame),
         metrics: metrics.as_ref(),
+        missing: missing.map(|mask| {
+            let mut bits = vec![0u8; (frames * joints).div_ceil(8)];
+            for f in 0..frames {
+                for j in 0..joints {
+                    if mask.is_missing(f, j) {
+                        let i = f * joints + j;
+                        bits[i / 8] |= 1 << (i % 8);
+                    }
+                }
+            }
+            base64::engine::general_purpose::STANDARD.encode(bits)
+        }),
+        missing_count: missing.map_or(0, |mask| mask.count()),
     };
     let json = serde_json::to_string(&data).expect("page data serialises");
     let title = match names.clip {

@@ -23,6 +23,14 @@
     for (let i = 0; i < s.length; i++) u[i] = s.charCodeAt(i);
     return new DataView(u.buffer);
   }
+  // Marker clips: samples the source lacks (mod.rs `missing`): drawn hollow,
+  // without bones, never as data.
+  const miss = D.missing ? bytes(D.missing) : null;
+  function missing(f, j) {
+    if (!miss) return false;
+    const i = f * J + j;
+    return (miss.getUint8(i >> 3) >> (i & 7)) & 1;
+  }
   const q = D.quantumMm;
   const orig = new Float32Array(N * J * 3);
   const dec = hasClip ? new Float32Array(N * J * 3) : null;
@@ -123,7 +131,8 @@
     $("summary").textContent =
       m.bytes + " B · ARMS " + m.arms_mm.toFixed(2) + " mm · max " + m.max_joint_err_mm.toFixed(2) +
       " mm (" + m.max_joint_err_joint + ", frame " + m.max_joint_err_frame + ") · angle max " +
-      m.angle_max_deg.toFixed(3) + "°";
+      m.angle_max_deg.toFixed(3) + "°" +
+      (D.missingCount ? " · " + D.missingCount + " samples missing in the source (hollow; errors there are against the encoder's fill)" : "");
     $("legend").innerHTML =
       '<div>joint error</div><div class="bar"></div><div class="ends"><span>0 mm</span><span>' +
       errScale.toFixed(1) + " mm</span></div>";
@@ -254,7 +263,7 @@
     g.lineWidth = width * dpr;
     for (let j = 0; j < J; j++) {
       const p = D.joints[j].parent;
-      if (p == null) continue;
+      if (p == null || missing(f, p) || missing(f, j)) continue;
       g.strokeStyle = colour(j);
       g.beginPath();
       if (segment(c, at(arr, f, p, shift), at(arr, f, j, shift))) g.stroke();
@@ -263,10 +272,17 @@
       const v = toCam(c, at(arr, f, j, shift));
       if (v[2] < NEAR) continue;
       const s = proj(c, v);
-      g.fillStyle = colour(j);
       g.beginPath();
       g.arc(s[0], s[1], (width * 0.9 + 1) * dpr, 0, 2 * Math.PI);
-      g.fill();
+      if (missing(f, j)) {
+        g.lineWidth = Math.max(1, dpr);
+        g.strokeStyle = "#9a958a";
+        g.stroke();
+        g.lineWidth = width * dpr;
+      } else {
+        g.fillStyle = colour(j);
+        g.fill();
+      }
     }
   }
   function draw() {
