@@ -571,7 +571,10 @@ fn encode_info_eval_a_c3d_marker_file() {
     let o = mocap(&["view", c3d, clip, "-o", page.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let html = std::fs::read_to_string(&page).expect("page");
-    assert!(html.contains(r#""missing":"IA==","missingCount":1"#), "{html}");
+    assert!(
+        html.contains(r#""missing":"IA==","missingCount":1"#),
+        "{html}"
+    );
     let o = mocap(&["eval", c3d, clip]);
     let out = text(&o.stdout);
     assert!(o.status.success(), "{}", text(&o.stderr));
