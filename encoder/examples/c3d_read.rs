@@ -8,18 +8,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for path in std::env::args().skip(1) {
         let bytes = std::fs::read(&path)?;
         let c = mocap_encoder::c3d::parse(&bytes, &path)?;
-        println!(
-            "{path}: {} {} data, {} frames at {} Hz, {} points, {} analog values per frame, unit {} ({:?}), {:.1} % of samples missing",
-            c.processor.name(),
-            if c.float { "float" } else { "integer" },
-            c.frames,
-            c.rate_hz,
-            c.points,
-            c.analog_per_frame,
-            c.unit,
-            c.unit_source,
-            100.0 * c.missing_fraction()
-        );
+        println!("{path}: {}", c.summary());
         println!("  markers: {}", c.marker_names().join(" "));
         let runs = 200;
         let t = Instant::now();

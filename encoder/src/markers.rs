@@ -16,7 +16,7 @@ use mocap_decoder::{consts, Clip};
 use crate::container::{assemble, varint};
 use crate::encode::{self, EncodeError, EncodeOptions, Encoded};
 use crate::metrics;
-use crate::motion::Motion;
+use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
 use crate::units::LengthUnit;
 
 /// Which samples (frame × marker) are missing.
@@ -327,28 +327,34 @@ pub fn marker_errors(
     }
 }
 
+/// The skeleton of a marker clip: one root joint per marker name, with the
+/// channels Xposition Yposition Zposition, offset 0, no End Sites.
+pub fn marker_skeleton(names: impl IntoIterator<Item = String>) -> Skeleton {
+    Skeleton {
+        joints: names
+            .into_iter()
+            .map(|name| Joint {
+                name,
+                parent: None,
+                offset: [0.0; 3],
+                channels: vec![
+                    ChannelKind::Xposition,
+                    ChannelKind::Yposition,
+                    ChannelKind::Zposition,
+                ],
+                end_site: false,
+            })
+            .collect(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::{ChannelKind, Joint, Skeleton};
 
     fn markers(k: usize, values: Vec<f64>) -> Motion {
         Motion {
-            skeleton: Skeleton {
-                joints: (0..k)
-                    .map(|i| Joint {
-                        name: format!("M{i}"),
-                        parent: None,
-                        offset: [0.0; 3],
-                        channels: vec![
-                            ChannelKind::Xposition,
-                            ChannelKind::Yposition,
-                            ChannelKind::Zposition,
-                        ],
-                        end_site: false,
-                    })
-                    .collect(),
-            },
+            skeleton: marker_skeleton((0..k).map(|i| format!("M{i}"))),
             frame_time: 0.01,
             values,
         }

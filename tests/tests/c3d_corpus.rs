@@ -20,15 +20,8 @@ fn c3d_corpus_reads() {
         let c = c3d::read_file(file).unwrap();
         let name = file.file_name().unwrap().to_string_lossy();
         eprintln!(
-            "{name}: {} {}, {} frames at {} Hz, {} points, {} analog values per frame, unit {}, {:.1} % missing; labels {}",
-            c.processor.name(),
-            if c.float { "float" } else { "integer" },
-            c.frames,
-            c.rate_hz,
-            c.points,
-            c.analog_per_frame,
-            c.unit,
-            100.0 * c.missing_fraction(),
+            "{name}: {}; labels {}",
+            c.summary(),
             c.marker_names().join(" ")
         );
         assert!(

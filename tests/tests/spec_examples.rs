@@ -602,8 +602,8 @@ fn worked_numbers_of_the_prose() {
 #[test]
 fn missing_samples_example() {
     use mocap_encoder::container::assemble;
-    use mocap_encoder::markers::{encode_markers, MarkerClip, MissingMask};
-    use mocap_encoder::motion::{ChannelKind, Joint, Motion, Skeleton};
+    use mocap_encoder::markers::{encode_markers, marker_skeleton, MarkerClip, MissingMask};
+    use mocap_encoder::motion::Motion;
 
     let section = spec_bytes("missing-samples");
     let mut mask = MissingMask::none(6, 3);
@@ -614,17 +614,6 @@ fn missing_samples_example() {
     assert_eq!(mask.to_section(), section);
 
     // Three markers, six frames, in mm; 0 at the missing samples (as the C3D reader gives them).
-    let joint = |name: &str| Joint {
-        name: name.into(),
-        parent: None,
-        offset: [0.0; 3],
-        channels: vec![
-            ChannelKind::Xposition,
-            ChannelKind::Yposition,
-            ChannelKind::Zposition,
-        ],
-        end_site: false,
-    };
     let mut values = Vec::new();
     for f in 0..6 {
         for k in 0..3 {
@@ -634,9 +623,7 @@ fn missing_samples_example() {
     }
     let clip = MarkerClip {
         motion: Motion {
-            skeleton: Skeleton {
-                joints: vec![joint("A"), joint("B"), joint("C")],
-            },
+            skeleton: marker_skeleton(["A", "B", "C"].map(String::from)),
             frame_time: 0.01,
             values,
         },

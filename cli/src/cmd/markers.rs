@@ -189,13 +189,10 @@ pub fn view(
         }
         None => None,
     };
-    let name = |p: &Path| {
-        p.file_name().map_or_else(
-            || p.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        )
-    };
-    let (source, clip_name) = (name(input), clip_path.map(name));
+    let (source, clip_name) = (
+        mocap_report::view::file_name(input),
+        clip_path.map(mocap_report::view::file_name),
+    );
     let names = mocap_report::view::Names {
         source: &source,
         clip: clip_name.as_deref(),

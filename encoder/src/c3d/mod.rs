@@ -42,8 +42,8 @@ mod tests;
 use std::fmt;
 use std::path::Path;
 
-use crate::markers::{MarkerClip, MissingMask};
-use crate::motion::{ChannelKind, Joint, Motion, Skeleton};
+use crate::markers::{marker_skeleton, MarkerClip, MissingMask};
+use crate::motion::Motion;
 use crate::units::LengthUnit;
 use bytes::Bytes;
 use params::Params;
@@ -432,6 +432,23 @@ fn unit_of(text: &str) -> Option<LengthUnit> {
 }
 
 impl C3d {
+    /// What was read, in one line: encoding, data type, frames, rate,
+    /// points, analog values per frame, unit and the missing fraction.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} {} data, {} frames at {} Hz, {} points, {} analog values per frame, unit {} ({:?}), {:.1} % of samples missing",
+            self.processor.name(),
+            if self.float { "float" } else { "integer" },
+            self.frames,
+            self.rate_hz,
+            self.points,
+            self.analog_per_frame,
+            self.unit,
+            self.unit_source,
+            100.0 * self.missing_fraction()
+        )
+    }
+
     /// The fraction of samples (frame × point) that are missing.
     pub fn missing_fraction(&self) -> f64 {
         let n = self.missing.iter().filter(|&&m| m).count();
@@ -460,24 +477,9 @@ impl C3d {
     /// offset 0, no End Sites; values in [`C3d::unit`], 0 where missing —
     /// with the missing mask and the unit.
     pub fn to_markers(&self) -> MarkerClip {
-        let joints = self
-            .marker_names()
-            .into_iter()
-            .map(|name| Joint {
-                name,
-                parent: None,
-                offset: [0.0; 3],
-                channels: vec![
-                    ChannelKind::Xposition,
-                    ChannelKind::Yposition,
-                    ChannelKind::Zposition,
-                ],
-                end_site: false,
-            })
-            .collect();
         MarkerClip {
             motion: Motion {
-                skeleton: Skeleton { joints },
+                skeleton: marker_skeleton(self.marker_names()),
                 frame_time: 1.0 / self.rate_hz,
                 values: self.positions.iter().flatten().copied().collect(),
             },

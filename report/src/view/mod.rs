@@ -229,7 +229,8 @@ pub fn load_with(
     page(&m, unit, decoded.as_ref().map(|(b, n)| (b, *n)), &names)
 }
 
-fn file_name(p: &Path) -> String {
+/// The name a page shows for `p`: its file name (the whole path if it has none).
+pub fn file_name(p: &Path) -> String {
     p.file_name().map_or_else(
         || p.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
