@@ -287,6 +287,24 @@ pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
     encode::encode(m, &opts).unwrap().bytes
 }
 
+/// The shipped demo clip (480 frames, 60 Hz, cm) sent far: its root
+/// travels 150 m along X and its heading winds 200 turns (150° a frame).
+/// No `index` key table holds that to 1 mm / 1°, so its `index` clip
+/// re-bases key frames (SPEC.md §4.5): the golden and QEMU case of that
+/// path.
+pub fn far_travelled_demo() -> mocap_encoder::motion::Motion {
+    let mut m = mocap_encoder::generate::animatronic_demo();
+    let n = m.skeleton.channel_count();
+    let frames = m.frames();
+    for f in 0..frames {
+        let s = f as f64 / frames as f64;
+        // Root channels: Xposition Yposition Zposition Zrotation Xrotation Yrotation.
+        m.values[f * n] += 15_000.0 * s;
+        m.values[f * n + 5] += 360.0 * 200.0 * s;
+    }
+    m
+}
+
 /// The headless browser of the page tests (`mocap view`): Debian's
 /// `chromium`, or `$MOCAP_CHROMIUM`. Without it a test prints SKIPPED and
 /// returns (`None`), except under `CI`, where a missing browser fails it.

@@ -224,6 +224,28 @@ fn golden_index_clip() {
     );
 }
 
+/// The demo sent 150 m and 200 turns away: `index` re-bases its key
+/// frames (SPEC.md §4.5).
+#[test]
+fn golden_index_rebased_clip() {
+    let m = mocap_tests::far_travelled_demo();
+    let bytes = motion_clip(&m, CodecChoice::Index, &["1deg"]);
+    let info = mocap_encoder::codec::describe_section(
+        0x10,
+        Clip::parse(&bytes)
+            .unwrap()
+            .sections()
+            .find(|s| s.id == 0x10)
+            .unwrap()
+            .bytes,
+        Clip::parse(&bytes).unwrap().header(),
+        false,
+    )
+    .unwrap();
+    assert!(info.contains("re-based key frames"), "{info}");
+    check_case("index_rebased_far_demo_1deg", &bytes);
+}
+
 #[test]
 fn golden_pca_spline_clip() {
     let m = demo();

@@ -207,6 +207,42 @@ fn errors_are_typed() {
     );
 }
 
+/// §4.5's rules on §7.2b's re-based clip: each broken rule is a typed
+/// error, never a panic or a wrong value.
+#[test]
+fn rebase_rules_are_typed_errors() {
+    let ex = examples().into_iter().find(|e| e.name == "rebase").unwrap();
+    let clip = Clip::parse(&ex.bytes).unwrap();
+    let sections: Vec<(u8, Vec<u8>)> = clip.sections().map(|s| (s.id, s.bytes.to_vec())).collect();
+    let with_codec = |f: &dyn Fn(&mut Vec<u8>)| {
+        let mut s = sections.clone();
+        f(&mut s[1].1);
+        Clip::parse(&mocap_encoder::container::assemble(&s)).unwrap_err()
+    };
+    let malformed = |rule: &'static str| Error::IndexMalformed { rule };
+    // Section: 8 bytes, key set 14 (flags at 11), delta set 14 (flags at
+    // 25), pool 6 (36..42), rebase rows 8 (42..50), payload 1.
+    assert_eq!(sections[1].1[11], 0x40);
+    assert_eq!(
+        with_codec(&|c| c.truncate(45)),
+        malformed("rebase table truncated")
+    );
+    // `rebase` in the delta set; bit 5 (reserved) in the key set.
+    assert_eq!(
+        with_codec(&|c| c[25] |= 0x40),
+        malformed("invalid group header")
+    );
+    assert_eq!(
+        with_codec(&|c| c[11] |= 0x20),
+        malformed("invalid group header")
+    );
+    // Without the flag the rows are read as payload: its length is wrong.
+    assert!(matches!(
+        with_codec(&|c| c[11] = 0),
+        Error::IndexPayloadTruncated { .. }
+    ));
+}
+
 /// The hex bytes of the ```` ```text spec-bytes=NAME ```` block of SPEC.md.
 fn spec_bytes(name: &str) -> Vec<u8> {
     let spec = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../SPEC.md"))

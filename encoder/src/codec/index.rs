@@ -3,8 +3,15 @@
 //! channels), and — where it is smaller — a delta codebook with absolute key
 //! frames every K frames. The encoder simulates the decoder exactly (closed
 //! loop), so delta errors never accumulate past the tolerance.
+//!
+//! A channel whose key-frame values no 12-bit table covers at its
+//! tolerance (the root of a long walk, a heading that winds many times) is
+//! re-based (SPEC.md §4.5): each key frame stores its exact value as an
+//! `i32`, and at `K = 0` every frame does — so every valid clip codes.
 
-use mocap_decoder::consts::index::{ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS};
+use mocap_decoder::consts::index::{
+    ENTRY_LEN, FLAG_ACCUMULATE, FLAG_REBASE, GROUP_HEADER_LEN, MAX_BITS,
+};
 
 use super::bits::BitWriter;
 use super::quantizer::{self, Codebook};
@@ -22,6 +29,9 @@ pub struct ChannelCode {
     pub key: Codebook,
     /// Delta codebook for delta frames; `None` for absolute channels.
     pub delta: Option<Codebook>,
+    /// Re-based channels (SPEC.md §4.5): the value of each key frame, in
+    /// key-frame order; `key` is then the one-entry zero table.
+    pub rebase: Option<Vec<i32>>,
     /// Index per frame.
     pub indices: Vec<u16>,
     /// The values the decoder will produce.
@@ -52,6 +62,7 @@ fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
         code: ChannelCode {
             key: cb,
             delta: None,
+            rebase: None,
             indices,
             decoded,
         },
@@ -59,20 +70,62 @@ fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
     })
 }
 
+/// The key table of a re-based channel: one zero entry, so the key value
+/// is its rebase row value.
+fn zero_table() -> Codebook {
+    Codebook {
+        bits: 0,
+        shift: 0,
+        base: 0,
+        entries: vec![0],
+    }
+}
+
+/// Every frame re-based (at `K = 0`): each value stored exactly as an
+/// `i32`. Codes any channel.
+fn raw(x: &[i64]) -> Candidate {
+    let decoded: Vec<i32> = x.iter().map(|&v| v as i32).collect();
+    let key = zero_table();
+    let bits = 32 * x.len() as u64 + table_bits(&key);
+    Candidate {
+        code: ChannelCode {
+            key,
+            delta: None,
+            rebase: Some(decoded.clone()),
+            indices: vec![0; x.len()],
+            decoded,
+        },
+        bits,
+    }
+}
+
+/// How key frames of a delta-coded channel are coded.
+enum KeyCode {
+    /// By a table.
+    Table(Codebook),
+    /// Re-based: exact `i32` values (SPEC.md §4.5).
+    Rebase,
+}
+
 fn table_bits(cb: &Codebook) -> u64 {
     16 * cb.entries.len() as u64 + 8 * ENTRY_LEN as u64
 }
 
 /// Delta coding with key frames every `k`; tries delta codebooks of
-/// growing size and keeps the first whose closed loop meets `tol`.
-fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8) -> Option<Candidate> {
+/// growing size and keeps the first whose closed loop meets `tol`. Key
+/// frames no table covers are re-based if `rebase` allows.
+fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8, rebase: bool) -> Option<Candidate> {
     let keys: Vec<i64> = x
         .iter()
         .enumerate()
         .filter(|(f, _)| is_key(*f, k))
         .map(|(_, &v)| v)
         .collect();
-    let key_cb = quantizer::fit(&keys, tol, MAX_BITS)?;
+    let key_cb = match quantizer::fit(&keys, tol, MAX_BITS) {
+        Some(cb) => KeyCode::Table(cb),
+        None if rebase => KeyCode::Rebase,
+        None => return None,
+    };
     let steps: Vec<i64> = (1..x.len())
         .filter(|&f| !is_key(f, k))
         .map(|f| x[f] - x[f - 1])
@@ -98,16 +151,25 @@ fn closed_loop(
     x: &[i64],
     tol: i64,
     k: usize,
-    key_cb: &Codebook,
+    key_code: &KeyCode,
     cb: &Codebook,
 ) -> Option<Candidate> {
     let mut indices = Vec::with_capacity(x.len());
     let mut decoded = Vec::with_capacity(x.len());
+    let mut rows = Vec::new();
     let mut prev: i32 = 0;
     for (f, &v) in x.iter().enumerate() {
         let (i, out) = if is_key(f, k) {
-            let i = key_cb.nearest(v);
-            (i, key_cb.value(i) as i32)
+            match key_code {
+                KeyCode::Table(key_cb) => {
+                    let i = key_cb.nearest(v);
+                    (i, key_cb.value(i) as i32)
+                }
+                KeyCode::Rebase => {
+                    rows.push(v as i32);
+                    (0, v as i32)
+                }
+            }
         } else {
             let i = cb.nearest(v - i64::from(prev));
             (i, prev.wrapping_add(cb.value(i) as i32))
@@ -121,12 +183,24 @@ fn closed_loop(
     }
     let nk = (0..x.len()).filter(|&f| is_key(f, k)).count() as u64;
     let nd = x.len() as u64 - nk;
-    let bits =
-        nk * u64::from(key_cb.bits) + nd * u64::from(cb.bits) + table_bits(key_cb) + table_bits(cb);
+    let (key, key_bits, rebase) = match key_code {
+        KeyCode::Table(key_cb) => (
+            key_cb.clone(),
+            nk * u64::from(key_cb.bits) + table_bits(key_cb),
+            None,
+        ),
+        KeyCode::Rebase => {
+            let key = zero_table();
+            let bits = nk * 32 + table_bits(&key);
+            (key, bits, Some(rows))
+        }
+    };
+    let bits = key_bits + nd * u64::from(cb.bits) + table_bits(cb);
     Some(Candidate {
         code: ChannelCode {
-            key: key_cb.clone(),
+            key,
             delta: Some(cb.clone()),
+            rebase,
             indices,
             decoded,
         },
@@ -135,14 +209,23 @@ fn closed_loop(
 }
 
 /// Codes one channel for key interval `k`: the cheaper of its absolute
-/// coding `abs` (the same for every `k`) and delta coding.
-fn code_channel(x: &[i64], tol: i64, k: usize, abs: &Candidate) -> Candidate {
+/// coding `abs` (the same for every `k`) and delta coding. A channel no
+/// absolute table covers is delta-coded on re-based key frames, or at
+/// `k = 0` stored raw; `None` if `k > 0` and no delta table meets `tol`.
+fn code_channel(x: &[i64], tol: i64, k: usize, abs: Option<&Candidate>) -> Option<Candidate> {
+    let Some(abs) = abs else {
+        return if k == 0 {
+            Some(raw(x))
+        } else {
+            delta(x, tol, k, MAX_BITS, true)
+        };
+    };
     if k == 0 || abs.code.key.bits <= 1 {
-        return abs.clone();
+        return Some(abs.clone());
     }
-    match delta(x, tol, k, abs.code.key.bits.saturating_sub(1)) {
-        Some(d) if d.bits < abs.bits => d,
-        _ => abs.clone(),
+    match delta(x, tol, k, abs.code.key.bits.saturating_sub(1), false) {
+        Some(d) if d.bits < abs.bits => Some(d),
+        _ => Some(abs.clone()),
     }
 }
 
@@ -164,7 +247,9 @@ pub struct ToleranceTooTight {
 
 /// Codes every channel (`x[channel][frame]`) within `tol[channel]` (same
 /// units), trying each key interval of `intervals` and keeping the
-/// smallest section.
+/// smallest section. With `0` among the intervals it always succeeds
+/// (channels no table covers are stored raw, SPEC.md §4.5); otherwise it
+/// fails on the first channel no interval can code.
 pub fn encode(
     x: &[Vec<i32>],
     tol: &[i64],
@@ -175,17 +260,22 @@ pub fn encode(
         .map(|c| c.iter().map(|&v| i64::from(v)).collect())
         .collect();
     // Absolute coding does not depend on the key interval: fit it once.
-    let absolutes = wide
+    let absolutes: Vec<Option<Candidate>> = wide
         .iter()
         .enumerate()
-        .map(|(c, series)| absolute(series, tol[c].max(0)).ok_or(ToleranceTooTight { channel: c }))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|(c, series)| absolute(series, tol[c].max(0)))
+        .collect();
     let mut best: Option<(u64, IndexEncoding)> = None;
-    for &k in intervals {
+    let mut failed: Option<usize> = None;
+    'intervals: for &k in intervals {
         let mut total = 0u64;
         let mut channels = Vec::with_capacity(x.len());
         for (c, (series, abs)) in wide.iter().zip(&absolutes).enumerate() {
-            let cand = code_channel(series, tol[c].max(0), usize::from(k), abs);
+            let Some(cand) = code_channel(series, tol[c].max(0), usize::from(k), abs.as_ref())
+            else {
+                failed.get_or_insert(c);
+                continue 'intervals;
+            };
             total += cand.bits;
             channels.push(cand.code);
         }
@@ -199,10 +289,14 @@ pub fn encode(
             ));
         }
     }
-    Ok(best.map(|(_, e)| e).unwrap_or(IndexEncoding {
-        key_interval: 0,
-        channels: Vec::new(),
-    }))
+    match (best, failed) {
+        (Some((_, e)), _) => Ok(e),
+        (None, Some(channel)) => Err(ToleranceTooTight { channel }),
+        (None, None) => Ok(IndexEncoding {
+            key_interval: 0,
+            channels: Vec::new(),
+        }),
+    }
 }
 
 /// Lays codebooks into one pool, letting a table's unused tail overlap the
@@ -234,24 +328,33 @@ struct Entry {
     bits: u8,
     shift: u8,
     accumulate: bool,
+    rebase: bool,
     table: u16,
     base: i32,
 }
 
-/// Groups entries by (width, shift, accumulate) in a stable order and
-/// returns the set's bytes and the entries in record order.
+impl Entry {
+    /// What entries of one group share.
+    fn group(&self) -> (u8, u8, bool, bool) {
+        (self.bits, self.shift, self.accumulate, self.rebase)
+    }
+}
+
+/// Groups entries by (width, shift, accumulate, rebase) in a stable order
+/// and returns the set's bytes and the entries in record order.
 fn write_set(entries: &[Entry]) -> (Vec<u8>, Vec<Entry>) {
     let mut order: Vec<Entry> = entries.to_vec();
-    order.sort_by_key(|e| (e.bits, e.shift, e.accumulate, e.channel));
+    order.sort_by_key(|e| (e.group(), e.channel));
     let mut out = Vec::new();
     let mut groups = 0u16;
     out.extend_from_slice(&[0, 0]);
-    for run in
-        order.chunk_by(|a, b| (a.bits, a.shift, a.accumulate) == (b.bits, b.shift, b.accumulate))
-    {
+    for run in order.chunk_by(|a, b| a.group() == b.group()) {
         for chunk in run.chunks(usize::from(u16::MAX)) {
             let e0 = chunk[0];
-            let flags = if e0.accumulate { FLAG_ACCUMULATE } else { 0 };
+            let mut flags = if e0.accumulate { FLAG_ACCUMULATE } else { 0 };
+            if e0.rebase {
+                flags |= FLAG_REBASE;
+            }
             let mut header = [0u8; GROUP_HEADER_LEN];
             header[0] = e0.bits;
             header[1] = e0.shift | flags;
@@ -275,6 +378,7 @@ fn entry(channel: usize, cb: &Codebook, table: u16, accumulate: bool) -> Entry {
         bits: cb.bits,
         shift: cb.shift,
         accumulate,
+        rebase: false,
         table,
         base: cb.base,
     }
@@ -301,7 +405,10 @@ impl IndexEncoding {
         let mut delta = Vec::new();
         for (c, (ch, &(key_off, delta_off))) in self.channels.iter().zip(&placed).enumerate() {
             pool.pad_for(key_off, ch.key.bits);
-            key.push(entry(c, &ch.key, key_off, false));
+            key.push(Entry {
+                rebase: ch.rebase.is_some(),
+                ..entry(c, &ch.key, key_off, false)
+            });
             match (&ch.delta, delta_off) {
                 (Some(d), Some(off)) => {
                     pool.pad_for(off, d.bits);
@@ -345,6 +452,18 @@ impl IndexEncoding {
         for e in &pool.entries {
             out.extend_from_slice(&e.to_le_bytes());
         }
+        // The rebase table (§4.5): a row per key frame, set order.
+        let rebased: Vec<&[i32]> = key_order
+            .iter()
+            .filter(|e| e.rebase)
+            .filter_map(|e| self.channels[usize::from(e.channel)].rebase.as_deref())
+            .collect();
+        let key_frames = rebased.first().map_or(0, |r| r.len());
+        for n in 0..key_frames {
+            for r in &rebased {
+                out.extend_from_slice(&r[n].to_le_bytes());
+            }
+        }
         out.extend_from_slice(&bits.finish());
         Ok(out)
     }
@@ -362,6 +481,8 @@ pub struct GroupInfo {
     pub bits: u8,
     /// Accumulating (delta) group.
     pub accumulate: bool,
+    /// Re-based key group (SPEC.md §4.5).
+    pub rebase: bool,
     /// Channels of the group.
     pub channels: Vec<u16>,
 }
@@ -377,6 +498,8 @@ pub struct SectionInfo {
     pub key: Vec<GroupInfo>,
     /// Groups of the delta set.
     pub delta: Vec<GroupInfo>,
+    /// Bytes of the rebase table (SPEC.md §4.5).
+    pub rebase_bytes: usize,
     /// Payload bytes.
     pub payload_bytes: usize,
 }
@@ -394,6 +517,7 @@ fn read_set(s: &[u8], at: &mut usize) -> Option<Vec<GroupInfo>> {
         groups.push(GroupInfo {
             bits: h[0],
             accumulate: h[1] & FLAG_ACCUMULATE != 0,
+            rebase: h[1] & FLAG_REBASE != 0,
             channels: body
                 .chunks_exact(ENTRY_LEN)
                 .map(|e| u16::from_le_bytes([e[0], e[1]]))
@@ -403,8 +527,9 @@ fn read_set(s: &[u8], at: &mut usize) -> Option<Vec<GroupInfo>> {
     Some(groups)
 }
 
-/// Reads the sets of an index section that the decoder validated.
-pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
+/// Reads the sets of an index section of a clip of `frames` frames that
+/// the decoder validated.
+pub fn inspect(section: &[u8], frames: u32) -> Option<SectionInfo> {
     let key_interval = u16::from_le_bytes(section.get(0..2)?.try_into().ok()?);
     let table_entries = u32::from_le_bytes(section.get(4..8)?.try_into().ok()?);
     let mut at = 8;
@@ -414,12 +539,24 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
     } else {
         Vec::new()
     };
-    let payload_at = at + 2 * table_entries as usize;
+    let key_frames = if key_interval == 0 {
+        frames
+    } else {
+        frames.div_ceil(u32::from(key_interval))
+    };
+    let rebased: usize = key
+        .iter()
+        .filter(|g| g.rebase)
+        .map(|g| g.channels.len())
+        .sum();
+    let rebase_bytes = key_frames as usize * rebased * 4;
+    let payload_at = at + 2 * table_entries as usize + rebase_bytes;
     Some(SectionInfo {
         key_interval,
         table_entries,
         key,
         delta,
+        rebase_bytes,
         payload_bytes: section.len().saturating_sub(payload_at),
     })
 }
@@ -434,6 +571,8 @@ pub struct DescriptorInfo {
     pub delta_bits: Option<u8>,
     /// True if delta frames accumulate.
     pub accumulate: bool,
+    /// True if key frames are re-based (SPEC.md §4.5).
+    pub rebase: bool,
 }
 
 impl SectionInfo {
@@ -444,6 +583,7 @@ impl SectionInfo {
                 key_bits: 0,
                 delta_bits: None,
                 accumulate: false,
+                rebase: false,
             };
             n
         ];
@@ -451,6 +591,7 @@ impl SectionInfo {
             for &c in &g.channels {
                 if let Some(d) = out.get_mut(usize::from(c)) {
                     d.key_bits = g.bits;
+                    d.rebase = g.rebase;
                 }
             }
         }
@@ -493,13 +634,21 @@ impl SectionInfo {
             delta as f64 / n as f64,
             n - unchanged - deltas
         );
+        let rebased = chans.iter().filter(|c| c.rebase).count();
+        if rebased > 0 {
+            s += &format!(
+                "  re-based key frames (SPEC §4.5): {rebased} channels, rebase table {} bytes\n",
+                self.rebase_bytes
+            );
+        }
         if channels {
             for (c, (ch, d)) in header.channels().zip(&chans).enumerate() {
                 s += &format!(
-                    "  {c:4} {}.{:<10} key {:2} bits, delta {} bits{} range [{}, {}]\n",
+                    "  {c:4} {}.{:<10} key {:2} bits{}, delta {} bits{} range [{}, {}]\n",
                     ch.joint_name,
                     ch.kind.name(),
                     d.key_bits,
+                    if d.rebase { " + i32 (re-based)" } else { "" },
                     d.delta_bits.map_or("-".to_string(), |b| format!("{b:2}")),
                     if d.accumulate { " (acc)" } else { "" },
                     ch.min,
