@@ -21,7 +21,11 @@
 //!   included; `POINT:USED`, `POINT:SCALE`, `POINT:RATE`, `POINT:FRAMES`,
 //!   `POINT:DATA_START`, `POINT:UNITS`, `POINT:LABELS` (then `LABELS2`,
 //!   `LABELS3`, … for more points), `ANALOG:USED`/`ANALOG:RATE` (checked
-//!   against the header's analog count);
+//!   against the header's analog count); for takes of more than 65 535
+//!   frames, whose header words cannot count them, `TRIAL:ACTUAL_START_FIELD`
+//!   and `TRIAL:ACTUAL_END_FIELD` (two int16 words each, low word first: a
+//!   32-bit frame number, as Vicon writes them) or else `POINT:LONG_FRAMES`
+//!   (a float, as C3Dserver writes it) give the frame range;
 //! * the data section: per frame, 4 values per point (x, y, z, residual
 //!   word) then the analog samples (skipped). Scale > 0: int16 values
 //!   × scale; scale < 0: floats in the processor's format (DEC's VAX
@@ -242,22 +246,31 @@ pub fn parse(data: &[u8], file: &str) -> Result<C3d, C3dError> {
         }
         _ => h_points,
     };
-    // Frames: the header's range, checked against POINT:FRAMES.
-    if last < first {
-        return Err(b.err(
-            8,
-            format!("last frame {last} is before the first frame {first}"),
-        ));
-    }
-    let frames = last - first + 1;
-    if let Some(n) = params.count(&b, "POINT", "FRAMES")? {
-        if n != frames {
-            return Err(b.err(
-                params.record_at("POINT", "FRAMES").unwrap_or(6),
-                format!("POINT:FRAMES is {n}, the header's frames {first}..={last} are {frames}"),
-            ));
+    // Frames: TRIAL's 32-bit range or POINT:LONG_FRAMES for long takes,
+    // else the header's range, checked against POINT:FRAMES.
+    let (first, frames) = match long_frames(&b, &params)? {
+        Some(range) => range,
+        None => {
+            if last < first {
+                return Err(b.err(
+                    8,
+                    format!("last frame {last} is before the first frame {first}"),
+                ));
+            }
+            let frames = last - first + 1;
+            if let Some(n) = params.count(&b, "POINT", "FRAMES")? {
+                if n != frames {
+                    return Err(b.err(
+                        params.record_at("POINT", "FRAMES").unwrap_or(6),
+                        format!(
+                            "POINT:FRAMES is {n}, the header's frames {first}..={last} are {frames}"
+                        ),
+                    ));
+                }
+            }
+            (first, frames)
         }
-    }
+    };
     // Scale: its sign says integer or float data.
     let scale = params.number(&b, "POINT", "SCALE")?.unwrap_or(h_scale);
     if scale == 0.0 {
@@ -408,6 +421,50 @@ pub fn parse(data: &[u8], file: &str) -> Result<C3d, C3dError> {
         positions,
         missing,
     })
+}
+
+/// The first frame and frame count of a take longer than the header's
+/// 16-bit words can count: `TRIAL:ACTUAL_START_FIELD`/`ACTUAL_END_FIELD`
+/// (each two int16 words, low first) when both are present, else
+/// `POINT:LONG_FRAMES` (first frame 1); `None` when neither is (or the
+/// range fits the header, which then stays the authority).
+fn long_frames(b: &Bytes<'_>, params: &Params) -> Result<Option<(usize, usize)>, C3dError> {
+    let field = |name: &str| -> Result<Option<u32>, C3dError> {
+        let Some(p) = params.get("TRIAL", name) else {
+            return Ok(None);
+        };
+        let what = format!("TRIAL:{name}");
+        if p.kind != 2 || p.elements() != 2 {
+            return Err(b.err(
+                p.record_at,
+                format!(
+                    "{what} must be two int16 words (type {}, {} elements)",
+                    p.kind,
+                    p.elements()
+                ),
+            ));
+        }
+        let lo = b.u16(p.data_at, &what)?;
+        let hi = b.u16(p.data_at + 2, &what)?;
+        Ok(Some(u32::from(lo) | u32::from(hi) << 16))
+    };
+    if let (Some(start), Some(end)) = (field("ACTUAL_START_FIELD")?, field("ACTUAL_END_FIELD")?) {
+        if end < start {
+            return Err(b.err(
+                params.record_at("TRIAL", "ACTUAL_END_FIELD").unwrap_or(8),
+                format!("TRIAL:ACTUAL_END_FIELD {end} is before ACTUAL_START_FIELD {start}"),
+            ));
+        }
+        let frames = (end - start) as usize + 1;
+        if frames > usize::from(u16::MAX) {
+            return Ok(Some((start as usize, frames)));
+        }
+        return Ok(None);
+    }
+    match params.count(b, "POINT", "LONG_FRAMES")? {
+        Some(n) if n > usize::from(u16::MAX) => Ok(Some((1, n))),
+        _ => Ok(None),
+    }
 }
 
 fn coordinate(frame: usize, point: usize, axis: usize) -> String {

@@ -21,8 +21,19 @@ struct Spec {
     units: Option<&'static str>,
     /// `POINT:USED` as written (default: `points`).
     used: Option<u16>,
-    /// `POINT:FRAMES` as written (default: `frames`).
+    /// `POINT:FRAMES` as written (default: `frames`, at most 65 535).
     frames_param: Option<u16>,
+    /// How a take of more than 65 535 frames states its length.
+    long: Option<Long>,
+}
+
+/// The conventions for takes the header's 16-bit words cannot count.
+#[derive(Clone, Copy, PartialEq)]
+enum Long {
+    /// `TRIAL:ACTUAL_START_FIELD` / `ACTUAL_END_FIELD` (Vicon).
+    Trial,
+    /// `POINT:LONG_FRAMES`, a float (C3Dserver).
+    LongFrames,
 }
 
 impl Spec {
@@ -37,7 +48,13 @@ impl Spec {
             units: Some("mm"),
             used: None,
             frames_param: None,
+            long: None,
         }
+    }
+
+    /// The frame count as a 16-bit header word holds it.
+    fn frames16(&self) -> u16 {
+        self.frames.min(usize::from(u16::MAX)) as u16
     }
 
     /// Position of point `p` at frame `f`: multiples of 0.5, exact in every
@@ -126,8 +143,26 @@ impl Spec {
         self.param(&mut p, 1, "USED", 2, &[], &self.int(used));
         self.param(&mut p, 1, "SCALE", 4, &[], &self.float(self.scale()));
         self.param(&mut p, 1, "RATE", 4, &[], &self.float(self.rate()));
-        let frames = self.frames_param.unwrap_or(self.frames as u16);
+        let frames = self.frames_param.unwrap_or(self.frames16());
         self.param(&mut p, 1, "FRAMES", 2, &[], &self.int(frames));
+        match self.long {
+            Some(Long::Trial) => {
+                self.group(&mut p, 3, "TRIAL");
+                let words = |v: u32| {
+                    let mut d = self.int(v as u16);
+                    d.extend(self.int((v >> 16) as u16));
+                    d
+                };
+                self.param(&mut p, 3, "ACTUAL_START_FIELD", 2, &[2], &words(1));
+                let end = words(self.frames as u32);
+                self.param(&mut p, 3, "ACTUAL_END_FIELD", 2, &[2], &end);
+            }
+            Some(Long::LongFrames) => {
+                let n = self.float(self.frames as f32);
+                self.param(&mut p, 1, "LONG_FRAMES", 4, &[], &n);
+            }
+            None => {}
+        }
         if let Some(u) = self.units {
             self.param(&mut p, 1, "UNITS", -1, &[u.len() as u8], u.as_bytes());
         }
@@ -173,7 +208,16 @@ impl Spec {
         });
         let units = self.units.map_or(0, |u| 2 + 5 + 2 + 2 + 1 + u.len() + 1);
         let num = |name: &str, w: usize| 2 + name.len() + 2 + 2 + w + 1;
-        (2 + 5 + 3)
+        let long = match self.long {
+            Some(Long::Trial) => {
+                (2 + 5 + 3)
+                    + 2 * (num("ACTUAL_END_FIELD", 4) + 1)
+                    + ("ACTUAL_START_FIELD".len() - "ACTUAL_END_FIELD".len())
+            }
+            Some(Long::LongFrames) => num("LONG_FRAMES", 4),
+            None => 0,
+        };
+        long + (2 + 5 + 3)
             + (2 + 6 + 3)
             + num("USED", 2)
             + num("SCALE", 4)
@@ -197,7 +241,7 @@ impl Spec {
         self.u16(&mut h, self.points as u16);
         self.u16(&mut h, analog_per_frame as u16);
         self.u16(&mut h, 1);
-        self.u16(&mut h, self.frames as u16);
+        self.u16(&mut h, self.frames16());
         self.u16(&mut h, 0);
         self.f32(&mut h, self.scale());
         self.u16(&mut h, self.data_block() as u16);
@@ -459,6 +503,46 @@ fn malformed_files_name_the_offset() {
     // A parameter of an unknown type.
     let kind_at = 512 + 4 + 10 + 11 + 2 + 4 + 2;
     assert_err(patched(&s, |b| b[kind_at] = 3), kind_at, "has type 3");
+}
+
+/// Takes of more than 65 535 frames: the header's words stop at 65 535;
+/// TRIAL's 32-bit fields or POINT:LONG_FRAMES give the length, in every
+/// encoding.
+#[test]
+fn takes_longer_than_65535_frames() {
+    for (processor, long) in [
+        (Processor::Intel, Long::Trial),
+        (Processor::Mips, Long::Trial),
+        (Processor::Dec, Long::LongFrames),
+        (Processor::Intel, Long::LongFrames),
+    ] {
+        let mut s = Spec::new(processor, true);
+        s.points = 1;
+        s.labels = None;
+        s.analog = 0;
+        s.frames = 70_001;
+        s.long = Some(long);
+        let c = read(&s).unwrap();
+        assert_eq!(c.frames, 70_001);
+        assert_eq!(c.first_frame, 1);
+        let last = Spec::position(70_000, 0).map(|v| v as f32 as f64);
+        assert_eq!(c.positions[70_000], last);
+        // One frame short: the frame that is cut is named.
+        let mut b = s.write();
+        b.truncate(b.len() - 16);
+        let e = parse(&b, "long.c3d").unwrap_err();
+        assert!(e.message.contains("frame 70001 of 70001"), "{e}");
+    }
+    // An end before the start is an error at the parameter.
+    let mut s = Spec::new(Processor::Intel, false);
+    s.long = Some(Long::Trial);
+    s.frames = 70_000;
+    let mut b = s.write();
+    let name = b"ACTUAL_END_FIELD";
+    let at = b.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 2 + 3;
+    b[at..at + 4].copy_from_slice(&[0, 0, 0, 0]);
+    let e = parse(&b, "t.c3d").unwrap_err();
+    assert!(e.message.contains("is before ACTUAL_START_FIELD"), "{e}");
 }
 
 #[test]
