@@ -2,6 +2,7 @@
 # Fuzz the decoder (decoder-nostd/fuzz, cargo-fuzz + libFuzzer): every target in
 # decoder-nostd/fuzz/fuzz_targets/ for SECONDS each —
 #   parse_and_play  any bytes -> Clip::parse + every way of playing: an Err or values, no panic;
+#   readers         any bytes -> the BVH, ASF, ASF + AMC and C3D readers: a motion or a located error;
 #   roundtrip       arbitrary small motion -> encoder -> decoder: every value within the bound.
 #
 #   bash scripts/fuzz.sh [SECONDS] [TARGET...]   # default 120 s per target, all targets
@@ -71,6 +72,27 @@ encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
 encode assets/animatronic_demo.bvh --rig assets/rigs/animatronic_demo.toml \
     -o "$seeds/demo_servo_pred.mcb" --codec predictive --max-error 0.5deg
 
+# Marker clips (the missing-sample section 0x81) and re-based index clips (SPEC §4.5).
+for f in "$corpus"/c3d/*.c3d; do
+    [ -f "$f" ] || continue
+    encode "$f" -o "$seeds/$(basename "$f" .c3d)_markers.mcb" --max-error 20mm
+    encode "$f" -o "$seeds/$(basename "$f" .c3d)_markers_idx.mcb" --codec index --max-error 20mm
+done
+
+# ---- seeds for readers: a selector byte (0 BVH, 1 ASF, 2 ASF NUL AMC, 3 C3D), then the file.
+rseeds=decoder-nostd/fuzz/corpus/readers
+mkdir -p "$rseeds"
+{ printf '\x00'; cat assets/animatronic_demo.bvh; } >"$rseeds/demo.bvh"
+if [ -f "$corpus/asf-amc/16.asf" ]; then
+    { printf '\x01'; cat "$corpus/asf-amc/16.asf"; } >"$rseeds/16.asf"
+    # A short AMC: the first 40 frames of 16_15 (the fuzzer's inputs stay small).
+    { printf '\x02'; cat "$corpus/asf-amc/16.asf"; printf '\x00'; awk '/^[0-9]+$/ { n++ } n <= 40' "$corpus/asf-amc/16_15.amc"; } >"$rseeds/16_15.amc"
+fi
+for f in "$corpus"/c3d/*.c3d; do
+    [ -f "$f" ] || continue
+    { printf '\x03'; head -c 65536 "$f"; } >"$rseeds/$(basename "$f")"
+done
+
 # ---- seeds for roundtrip: the minimised corpus of the long runs (BENCHMARKS.md §4), committed as
 # decoder-nostd/fuzz/seeds/roundtrip.tar.gz (2 929 arbitrary motions, 2026-12-03); files the
 # fuzzer has added since stay.
@@ -97,6 +119,7 @@ for t in "${targets[@]}"; do
     fi
     extra=()
     [ "$t" = parse_and_play ] && extra=(-max_len=65536)
+    [ "$t" = readers ] && extra=(-max_len=131072)
     rc=0
     cargo +nightly fuzz run "${build_flags[@]}" "$t" -- -max_total_time="$secs" "${extra[@]}" >>"$tlog" 2>&1 || rc=$?
     # libFuzzer: "#N DONE cov: C ft: F corp: K/S ..." and "Done N runs in S second(s)".
