@@ -648,6 +648,13 @@ fn missing_samples_example() {
     }
     mask.missing[5 * 3 + 2] = true;
     assert_eq!(mask.to_section(), section);
+    // The reference reader, from §3.7's prose, reads the same mask.
+    let reference = spec_reference::missing_samples(&section, 3, 6);
+    for (k, marker) in reference.iter().enumerate() {
+        for (f, &gone) in marker.iter().enumerate() {
+            assert_eq!(gone, mask.is_missing(f, k), "marker {k} frame {f}");
+        }
+    }
 
     // Three markers, six frames, in mm; 0 at the missing samples (as the C3D reader gives them).
     let mut values = Vec::new();
@@ -707,7 +714,11 @@ fn missing_samples_example() {
     let with = |bytes: &[u8]| {
         let mut s = others.clone();
         s.push((0x81, bytes.to_vec()));
-        Clip::parse(&assemble(&s)).err()
+        // The reference reader refuses what the decoder refuses.
+        let reference = std::panic::catch_unwind(|| spec_reference::missing_samples(bytes, 3, 6));
+        let decoded = Clip::parse(&assemble(&s)).err();
+        assert_eq!(reference.is_err(), decoded.is_some(), "{bytes:02x?}");
+        decoded
     };
     assert_eq!(
         with(&[0x02, 0x00, 0x00]),

@@ -198,6 +198,33 @@ impl Bits<'_> {
     }
 }
 
+// ---------------------------------------------------------------- §3.7
+
+/// §3.7: the missing samples of a marker clip, `[marker][frame]` (true:
+/// missing), from a section for `markers` markers of `frames` frames.
+/// Panics where a rule of §3.7 is broken.
+pub fn missing_samples(section: &[u8], markers: usize, frames: u32) -> Vec<Vec<bool>> {
+    let mut r = Reader::new(section);
+    assert_eq!(r.varint() as usize, markers, "marker count");
+    let mut out = Vec::new();
+    for _ in 0..markers {
+        let runs = r.varint();
+        let mut mask = Vec::new();
+        for i in 0..runs {
+            let len = r.varint();
+            assert!(i == 0 || len > 0, "a run after the first is 0 long");
+            mask.extend(std::iter::repeat_n(i % 2 == 1, len as usize));
+        }
+        if runs == 0 {
+            mask = vec![false; frames as usize];
+        }
+        assert_eq!(mask.len(), frames as usize, "runs add up to the frames");
+        out.push(mask);
+    }
+    assert!(r.done(), "bytes after the last marker");
+    out
+}
+
 // ---------------------------------------------------------------- §4
 
 #[derive(Debug)]
