@@ -169,3 +169,29 @@ echo '```text'
 mocap_logged "$log" cargo test --release -q -p mocap-tests --test show_clock -- --nocapture
 grep -E '^clock ' "$log" || true
 echo '```'
+
+echo
+echo "## Readers: throughput and a folder of 500 files (encoder/examples/read_folder.rs)"
+echo
+# 500 files made of the corpus' BVH and AMC files (links, each AMC beside its ASF), read the way
+# every command reads a folder; then the same folder through `mocap bench` (index, 1°).
+cargo build --release -q -p mocap-encoder --example read_folder
+read_folder="${CARGO_TARGET_DIR:-target}/release/examples/read_folder"
+folder="$out/folder500"
+rm -rf "$folder"
+mkdir -p "$folder"
+mapfile -t sources < <(find "$corpus_abs/cmu" "$corpus_abs/cmu-long" "$corpus_abs/iclone-cmu" "$corpus_abs/asf-amc" \
+    \( -name '*.bvh' ! -name '*other_converter*' -o -name '*.amc' \) | sort)
+for a in "$corpus_abs"/asf-amc/*.asf; do ln -s "$a" "$folder/"; done
+for i in $(seq 0 499); do
+    src="${sources[$((i % ${#sources[@]}))]}"
+    base="$(basename "$src")"
+    ln -s "$src" "$folder/${base%.*}_$i.${base##*.}"
+done
+echo '```text'
+"$read_folder" "$corpus_abs/cmu" "$corpus_abs/cmu-long" "$corpus_abs/iclone-cmu" "$corpus_abs/asf-amc"
+echo "-- the folder of 500:"
+"$read_folder" "$folder"
+/usr/bin/time -f "mocap bench (index, 1deg) over the 500 files: %e s wall, %M KB peak RSS" \
+    "$mocap" bench "$folder" --codec index --max-error 1deg 2>&1 >/dev/null | tail -1
+echo '```'
