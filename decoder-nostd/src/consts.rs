@@ -89,11 +89,6 @@ pub mod index {
     pub const FLAG_ACCUMULATE: u8 = 0x80;
     /// Mask of the shift in group header byte 1.
     pub const SHIFT_MASK: u8 = 0x1F;
-    /// Group flag (key set only): the entries' key-frame values are re-based
-    /// on the key frame's row of the rebase table (§4.5).
-    pub const FLAG_REBASE: u8 = 0x40;
-    /// Bytes of one rebase value (an `i32`), §4.5.
-    pub const REBASE_LEN: usize = 4;
 }
 
 /// `pca-spline` codec constants, SPEC.md §5.

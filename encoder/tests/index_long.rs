@@ -1,4 +1,5 @@
-//! The `index` codec on channels no 12-bit table covers (SPEC.md §4.5):
+//! The `index` codec on channels no 12-bit table covers (SPEC.md §4.5,
+//! key frames in levels):
 //! the root of a long walk, a heading that winds many times, a channel of
 //! wild jumps. Every clip must encode, and the `no_std` decoder must play
 //! it back within the bound, frame by frame and by random access.
@@ -92,7 +93,7 @@ fn info(bytes: &[u8]) -> String {
 /// and Z, the heading 200 turns (72 000°, a figure that spins), a periodic
 /// arm swing. No key table holds X, Z or the heading to 1 mm / 1°.
 #[test]
-fn a_long_walk_encodes_with_rebased_key_frames() {
+fn a_long_walk_encodes_with_key_frames_in_levels() {
     let m = motion(20_000, |f, c| {
         let t = f as f64 / 30.0;
         match c {
@@ -103,23 +104,27 @@ fn a_long_walk_encodes_with_rebased_key_frames() {
         }
     });
     let e = encode::encode(&m, &options(None)).expect("a long walk encodes");
-    assert!(e.key_interval > 0, "delta frames between re-based keys");
+    assert!(
+        e.key_interval > 0,
+        "delta frames between key frames in levels: {}",
+        info(&e.bytes)
+    );
     let text = info(&e.bytes);
     assert!(
-        text.contains("re-based key frames (SPEC §4.5): 3 channels"),
+        text.contains("key frames in levels (SPEC §4.5): 3 channels"),
         "{text}"
     );
-    // Far below 32 bits per value: re-basing costs only the key frames.
+    // Far below 32 bits per value: levels cost only the key frames.
     let bits_per_value = e.bytes.len() as f64 * 8.0 / (20_000.0 * 4.0);
     assert!(bits_per_value < 12.0, "{bits_per_value} bits per value");
     check_within_bound(&m, &e.bytes);
 }
 
 /// Values that jump anywhere in ±2·10⁹ µm every frame: no table and no
-/// delta table covers them; at `K = 0` the channel is stored raw and still
-/// decodes exactly.
+/// delta table covers them; at `K = 0` every frame is coded in levels and
+/// decodes within the bound.
 #[test]
-fn wild_jumps_fall_back_to_raw_values() {
+fn wild_jumps_fall_back_to_levels_at_k0() {
     let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut jumps = Vec::new();
     for _ in 0..600 {
@@ -136,22 +141,22 @@ fn wild_jumps_fall_back_to_raw_values() {
     });
     let e = encode::encode(&m, &options(None)).expect("any valid clip encodes");
     assert_eq!(e.key_interval, 0);
-    assert!(info(&e.bytes).contains("+ i32 (re-based)"));
+    assert!(info(&e.bytes).contains("levels"), "{}", info(&e.bytes));
     check_within_bound(&m, &e.bytes);
-    // A forced key interval has no raw fallback: a clear error names the
-    // channel.
+    // A forced key interval has no fallback at K = 0: a clear error names
+    // the channel.
     let err = encode::encode(&m, &options(Some(8))).unwrap_err();
     assert!(err.to_string().contains("Hips.Xposition"), "{err}");
 }
 
-/// Clips that fit the tables do not change: no rebase group appears.
+/// Clips that fit the tables do not change: no levels appear.
 #[test]
-fn short_clips_use_no_rebase() {
+fn short_clips_use_no_levels() {
     let m = motion(300, |f, c| {
         let t = f as f64 / 30.0;
         [0.3 * t, 0.1 * t, 20.0 * t.sin(), 10.0 * (2.0 * t).cos()][c]
     });
     let e = encode::encode(&m, &options(None)).unwrap();
-    assert!(!info(&e.bytes).contains("re-based"));
+    assert!(!info(&e.bytes).contains("levels"));
     check_within_bound(&m, &e.bytes);
 }

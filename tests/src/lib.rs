@@ -290,8 +290,8 @@ pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
 /// The shipped demo clip (480 frames, 60 Hz, cm) sent far: its root
 /// travels 150 m along X and its heading winds 200 turns (150° a frame).
 /// No `index` key table holds that to 1 mm / 1°, so its `index` clip
-/// re-bases key frames (SPEC.md §4.5): the golden and QEMU case of that
-/// path.
+/// codes key frames in levels (SPEC.md §4.5): the golden and QEMU case of
+/// that path.
 pub fn far_travelled_demo() -> mocap_encoder::motion::Motion {
     let mut m = mocap_encoder::generate::animatronic_demo();
     let n = m.skeleton.channel_count();

@@ -224,10 +224,10 @@ fn golden_index_clip() {
     );
 }
 
-/// The demo sent 150 m and 200 turns away: `index` re-bases its key
-/// frames (SPEC.md §4.5).
+/// The demo sent 150 m and 200 turns away: `index` codes its key frames
+/// in levels (SPEC.md §4.5).
 #[test]
-fn golden_index_rebased_clip() {
+fn golden_index_levels_clip() {
     let m = mocap_tests::far_travelled_demo();
     let bytes = motion_clip(&m, CodecChoice::Index, &["1deg"]);
     let info = mocap_encoder::codec::describe_section(
@@ -242,8 +242,8 @@ fn golden_index_rebased_clip() {
         false,
     )
     .unwrap();
-    assert!(info.contains("re-based key frames"), "{info}");
-    check_case("index_rebased_far_demo_1deg", &bytes);
+    assert!(info.contains("key frames in levels"), "{info}");
+    check_case("index_levels_far_demo_1deg", &bytes);
 }
 
 #[test]

@@ -116,8 +116,8 @@ fn firmware_output_matches_host_on_three_cores() {
         return;
     }
     check("demo", &generate::animatronic_demo(), None);
-    // Re-based key frames (SPEC.md §4.5).
-    check("index-rebased", &mocap_tests::far_travelled_demo(), None);
+    // Key frames in levels (SPEC.md §4.5).
+    check("index-levels", &mocap_tests::far_travelled_demo(), None);
     if let Some(f) = corpus_file("cmu", "35_01.bvh") {
         check("cmu-35_01", &bvh::read_file(&f).unwrap(), None);
     }

@@ -207,40 +207,55 @@ fn errors_are_typed() {
     );
 }
 
-/// §4.5's rules on §7.2b's re-based clip: each broken rule is a typed
-/// error, never a panic or a wrong value.
+/// §4.5 on §7.2b's clip in levels: each level matters, and the key set
+/// still needs an entry per channel.
 #[test]
-fn rebase_rules_are_typed_errors() {
-    let ex = examples().into_iter().find(|e| e.name == "rebase").unwrap();
+fn key_frames_in_levels() {
+    let ex = examples().into_iter().find(|e| e.name == "levels").unwrap();
     let clip = Clip::parse(&ex.bytes).unwrap();
     let sections: Vec<(u8, Vec<u8>)> = clip.sections().map(|s| (s.id, s.bytes.to_vec())).collect();
-    let with_codec = |f: &dyn Fn(&mut Vec<u8>)| {
+    let frames_with = |f: &dyn Fn(&mut Vec<u8>)| {
         let mut s = sections.clone();
         f(&mut s[1].1);
-        Clip::parse(&mocap_encoder::container::assemble(&s)).unwrap_err()
+        let bytes = mocap_encoder::container::assemble(&s);
+        let clip = Clip::parse(&bytes)?;
+        let mut player = Player::<1>::new(&clip).unwrap();
+        let mut out = [0i32];
+        let mut frames = Vec::new();
+        while player.next_frame(&mut out).unwrap().is_some() {
+            frames.push(out[0]);
+        }
+        Ok::<_, Error>(frames)
     };
-    let malformed = |rule: &'static str| Error::IndexMalformed { rule };
-    // Section: 8 bytes, key set 14 (flags at 11), delta set 14 (flags at
-    // 25), pool 6 (36..42), rebase rows 8 (42..50), payload 1.
-    assert_eq!(sections[1].1[11], 0x40);
+    // Section: 8 bytes; key set 2 + 12 + 12 (flags at 11 and 23); delta
+    // set 14; pool 12 (48..60); payload 1.
     assert_eq!(
-        with_codec(&|c| c.truncate(45)),
-        malformed("rebase table truncated")
+        frames_with(&|_| {}),
+        Ok(vec![70_000_000, 70_000_250, -30_000_000])
     );
-    // `rebase` in the delta set; bit 5 (reserved) in the key set.
+    // The fine level assigning instead of adding: it comes second, so the
+    // coarse level is lost (its value 0 + the fine entry).
+    assert_eq!(frames_with(&|c| c[23] &= !0x80), Ok(vec![-640, -390, -896]));
+    // Both assigning: the later entry wins (§4.2), as before §4.5.
     assert_eq!(
-        with_codec(&|c| c[25] |= 0x40),
-        malformed("invalid group header")
+        frames_with(&|c| {
+            c[11] &= !0x80;
+            c[23] &= !0x80;
+        }),
+        Ok(vec![-640, -390, -896])
     );
+    // A key set with fewer entries than channels: one group of none.
+    let err = frames_with(&|c| {
+        c.splice(8..34, [1, 0, 0, 0, 0, 0]);
+        c.truncate(c.len() - 1);
+        c.push(0);
+    });
     assert_eq!(
-        with_codec(&|c| c[11] |= 0x20),
-        malformed("invalid group header")
+        err,
+        Err(Error::IndexMalformed {
+            rule: "key set has fewer entries than channels"
+        })
     );
-    // Without the flag the rows are read as payload: its length is wrong.
-    assert!(matches!(
-        with_codec(&|c| c[11] = 0),
-        Error::IndexPayloadTruncated { .. }
-    ));
 }
 
 /// The hex bytes of the ```` ```text spec-bytes=NAME ```` block of SPEC.md.

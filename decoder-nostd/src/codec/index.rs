@@ -10,14 +10,13 @@
 
 use crate::bits::BitReader;
 use crate::consts::index::{
-    ENTRY_LEN, FLAG_ACCUMULATE, FLAG_REBASE, GROUP_HEADER_LEN, MAX_BITS, MAX_SHIFT, REBASE_LEN,
-    SHIFT_MASK,
+    ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS, MAX_SHIFT, SHIFT_MASK,
 };
 use crate::error::Error;
 use crate::reader::Reader;
 
 /// Flag bits that must be zero in group header byte 1.
-const RESERVED_FLAGS: u8 = !(FLAG_ACCUMULATE | FLAG_REBASE | SHIFT_MASK);
+const RESERVED_FLAGS: u8 = !(FLAG_ACCUMULATE | SHIFT_MASK);
 
 /// A validated view of an `index` codec section.
 #[derive(Clone, Copy, Debug)]
@@ -26,10 +25,6 @@ pub(crate) struct IndexCodec<'a> {
     key_set: &'a [u8],
     delta_set: &'a [u8],
     table: &'a [u8],
-    /// The rebase table (§4.5): one row of `rebase_row` bytes per key
-    /// frame; empty when no key group re-bases.
-    rebase: &'a [u8],
-    rebase_row: usize,
     payload: &'a [u8],
     key_bits: u64,
     delta_bits: u64,
@@ -40,8 +35,6 @@ struct SetInfo<'a> {
     bytes: &'a [u8],
     bits: u64,
     entries: u64,
-    /// Entries of the set's rebase groups.
-    rebased: u64,
 }
 
 impl<'a> IndexCodec<'a> {
@@ -56,18 +49,18 @@ impl<'a> IndexCodec<'a> {
         if count != channels {
             return Err(malformed("channel count differs from the header"));
         }
-        let key = check_set(&mut r, channels, table_len, false)?;
-        if key.entries != channels as u64 {
-            return Err(malformed("key set must have one entry per channel"));
+        let key = check_set(&mut r, channels, table_len)?;
+        // One entry per channel, or several accumulating levels (§4.5).
+        if key.entries < channels as u64 {
+            return Err(malformed("key set has fewer entries than channels"));
         }
         let delta = if key_interval > 0 {
-            check_set(&mut r, channels, table_len, true)?
+            check_set(&mut r, channels, table_len)?
         } else {
             SetInfo {
                 bytes: &[],
                 bits: 0,
                 entries: 0,
-                rebased: 0,
             }
         };
         let table_bytes = usize::try_from(table_len)
@@ -75,30 +68,12 @@ impl<'a> IndexCodec<'a> {
             .and_then(|n| n.checked_mul(2))
             .ok_or(malformed("table too large"))?;
         let table = r.take(table_bytes).ok_or(malformed("table truncated"))?;
-        let key_frames = if key_interval == 0 {
-            frames
-        } else {
-            frames.div_ceil(key_interval)
-        };
-        let rebase_row = usize::try_from(key.rebased)
-            .ok()
-            .and_then(|n| n.checked_mul(REBASE_LEN))
-            .ok_or(malformed("rebase table too large"))?;
-        let rebase_bytes = usize::try_from(key_frames)
-            .ok()
-            .and_then(|n| n.checked_mul(rebase_row))
-            .ok_or(malformed("rebase table too large"))?;
-        let rebase = r
-            .take(rebase_bytes)
-            .ok_or(malformed("rebase table truncated"))?;
         let payload = r.rest();
         let codec = IndexCodec {
             key_interval,
             key_set: key.bytes,
             delta_set: delta.bytes,
             table,
-            rebase,
-            rebase_row,
             payload,
             key_bits: key.bits,
             delta_bits: delta.bits,
@@ -146,8 +121,7 @@ impl<'a> IndexCodec<'a> {
     /// when `frame` is a delta frame (§4.3). `None` (with `state` partly
     /// written) only if an invariant of the validated section is broken.
     pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
-        let key = self.is_key(frame);
-        let set = if key {
+        let set = if self.is_key(frame) {
             // A key frame defines every channel from scratch (§4.3).
             state.fill(0);
             self.key_set
@@ -171,45 +145,6 @@ impl<'a> IndexCodec<'a> {
                 decode_group::<true>(entries, self.table, &mut bits, width, shift, state);
             } else {
                 decode_group::<false>(entries, self.table, &mut bits, width, shift, state);
-            }
-        }
-        if key && !self.rebase.is_empty() {
-            self.rebase_key_frame(frame, state)?;
-        }
-        Some(())
-    }
-
-    /// Adds key frame `frame`'s row of the rebase table to the channels
-    /// of the key set's rebase groups, in set order (§4.5).
-    fn rebase_key_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
-        let n = if self.key_interval == 0 {
-            frame
-        } else {
-            frame.checked_div(self.key_interval)?
-        };
-        let at = usize::try_from(n).ok()?.checked_mul(self.rebase_row)?;
-        let mut row = self
-            .rebase
-            .get(at..at.checked_add(self.rebase_row)?)?
-            .chunks_exact(REBASE_LEN);
-        let mut r = Reader::new(self.key_set);
-        let groups = r.u16_le()?;
-        for _ in 0..groups {
-            let &[_, flags, c0, c1] = r.take(GROUP_HEADER_LEN)? else {
-                return None;
-            };
-            let count = usize::from(u16::from_le_bytes([c0, c1]));
-            let entries = r.take(count.saturating_mul(ENTRY_LEN))?;
-            if flags & FLAG_REBASE == 0 {
-                continue;
-            }
-            for e in entries.chunks_exact(ENTRY_LEN) {
-                let &[ch0, ch1, ..] = e else { return None };
-                let &[b0, b1, b2, b3] = row.next()? else {
-                    return None;
-                };
-                let s = state.get_mut(usize::from(u16::from_le_bytes([ch0, ch1])))?;
-                *s = s.wrapping_add(i32::from_le_bytes([b0, b1, b2, b3]));
             }
         }
         Some(())
@@ -255,27 +190,22 @@ fn check_set<'a>(
     r: &mut Reader<'a>,
     channels: usize,
     table_len: u32,
-    delta: bool,
 ) -> Result<SetInfo<'a>, Error> {
     let start = r.clone();
     let truncated = Error::IndexMalformed {
         rule: "set truncated",
     };
     let groups = r.u16_le().ok_or(truncated)?;
-    let (mut bits, mut entries, mut rebased, mut len) = (0u64, 0u64, 0u64, 2usize);
+    let (mut bits, mut entries, mut len) = (0u64, 0u64, 2usize);
     for _ in 0..groups {
         let Some(&[width, shift_flags, c0, c1]) = r.take(GROUP_HEADER_LEN) else {
             return Err(truncated);
         };
         let count = usize::from(u16::from_le_bytes([c0, c1]));
         let body = r.take(count * ENTRY_LEN).ok_or(truncated)?;
-        let accumulate = shift_flags & FLAG_ACCUMULATE != 0;
-        let rebase = shift_flags & FLAG_REBASE != 0;
         if width > MAX_BITS
             || shift_flags & SHIFT_MASK > MAX_SHIFT
             || shift_flags & RESERVED_FLAGS != 0
-            || (accumulate && !delta)
-            || (rebase && delta)
         {
             return Err(Error::IndexMalformed {
                 rule: "invalid group header",
@@ -295,9 +225,6 @@ fn check_set<'a>(
         }
         bits = bits.wrapping_add(u64::from(width).wrapping_mul(count as u64));
         entries = entries.wrapping_add(count as u64);
-        if rebase {
-            rebased = rebased.wrapping_add(count as u64);
-        }
         len = len.wrapping_add(GROUP_HEADER_LEN.wrapping_add(body.len()));
     }
     let bytes = start.clone().take(len).ok_or(truncated)?;
@@ -305,6 +232,5 @@ fn check_set<'a>(
         bytes,
         bits,
         entries,
-        rebased,
     })
 }

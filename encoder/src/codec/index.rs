@@ -6,12 +6,11 @@
 //!
 //! A channel whose key-frame values no 12-bit table covers at its
 //! tolerance (the root of a long walk, a heading that winds many times) is
-//! re-based (SPEC.md §4.5): each key frame stores its exact value as an
-//! `i32`, and at `K = 0` every frame does — so every valid clip codes.
+//! coded in levels (SPEC.md §4.5): a coarse table, then tables of the
+//! remainders, summed by accumulating key-set entries — the decoder's loop
+//! as it is. At `K = 0` that codes any valid clip.
 
-use mocap_decoder::consts::index::{
-    ENTRY_LEN, FLAG_ACCUMULATE, FLAG_REBASE, GROUP_HEADER_LEN, MAX_BITS,
-};
+use mocap_decoder::consts::index::{ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS};
 
 use super::bits::BitWriter;
 use super::quantizer::{self, Codebook};
@@ -29,9 +28,10 @@ pub struct ChannelCode {
     pub key: Codebook,
     /// Delta codebook for delta frames; `None` for absolute channels.
     pub delta: Option<Codebook>,
-    /// Re-based channels (SPEC.md §4.5): the value of each key frame, in
-    /// key-frame order; `key` is then the one-entry zero table.
-    pub rebase: Option<Vec<i32>>,
+    /// Key frames in levels (SPEC.md §4.5): the levels after `key` (the
+    /// coarse one), each with its index per frame (read at key frames).
+    /// Empty for a channel `key` covers alone.
+    pub levels: Vec<(Codebook, Vec<u16>)>,
     /// Index per frame.
     pub indices: Vec<u16>,
     /// The values the decoder will produce.
@@ -62,7 +62,7 @@ fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
         code: ChannelCode {
             key: cb,
             delta: None,
-            rebase: None,
+            levels: Vec::new(),
             indices,
             decoded,
         },
@@ -70,41 +70,100 @@ fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
     })
 }
 
-/// The key table of a re-based channel: one zero entry, so the key value
-/// is its rebase row value.
-fn zero_table() -> Codebook {
-    Codebook {
-        bits: 0,
-        shift: 0,
-        base: 0,
-        entries: vec![0],
+/// Most levels a key value is split into: three 12-bit levels reach any
+/// `i32` exactly.
+const MAX_LEVELS: usize = 3;
+
+/// Codebooks whose sum codes every point within `tol` (SPEC.md §4.5): one
+/// if a table covers the points, else a coarse table (tolerance `tol·2^k`,
+/// the `k` of the fewest bits) and the levels of the remainders. `None`
+/// if [`MAX_LEVELS`] do not reach.
+fn fit_levels(points: &[i64], tol: i64, depth: usize) -> Option<Vec<Codebook>> {
+    if let Some(cb) = quantizer::fit(points, tol, MAX_BITS) {
+        return Some(vec![cb]);
     }
+    if depth <= 1 {
+        return None;
+    }
+    let mut best: Option<(u64, Vec<Codebook>)> = None;
+    for k in 2..=MAX_BITS {
+        let coarse_tol = tol.max(1) << k;
+        let Some(coarse) = quantizer::fit(points, coarse_tol, MAX_BITS) else {
+            continue;
+        };
+        let rest: Vec<i64> = points
+            .iter()
+            .map(|&p| p - coarse.value(coarse.nearest(p)))
+            .collect();
+        let Some(finer) = fit_levels(&rest, tol, depth - 1) else {
+            continue;
+        };
+        let mut levels = vec![coarse];
+        levels.extend(finer);
+        let bits: u64 = levels
+            .iter()
+            .map(|cb| points.len() as u64 * u64::from(cb.bits) + table_bits(cb))
+            .sum();
+        if best.as_ref().is_none_or(|(b, _)| bits < *b) {
+            best = Some((bits, levels));
+        }
+    }
+    best.map(|(_, l)| l)
 }
 
-/// Every frame re-based (at `K = 0`): each value stored exactly as an
-/// `i32`. Codes any channel.
-fn raw(x: &[i64]) -> Candidate {
-    let decoded: Vec<i32> = x.iter().map(|&v| v as i32).collect();
-    let key = zero_table();
-    let bits = 32 * x.len() as u64 + table_bits(&key);
-    Candidate {
+/// The indices of `v` in each level (coarse first, each level coding what
+/// the ones before left) and the value the decoder sums (wrapping).
+fn code_levels(levels: &[Codebook], v: i64) -> (Vec<u16>, i32) {
+    let mut out: i32 = 0;
+    let mut indices = Vec::with_capacity(levels.len());
+    for cb in levels {
+        let i = cb.nearest(v - i64::from(out));
+        indices.push(i as u16);
+        out = out.wrapping_add(cb.value(i) as i32);
+    }
+    (indices, out)
+}
+
+/// Every frame coded in levels at `K = 0` (SPEC.md §4.5): for channels no
+/// single table covers.
+fn absolute_levels(x: &[i64], tol: i64) -> Option<Candidate> {
+    let levels = fit_levels(x, tol, MAX_LEVELS)?;
+    let mut per_level: Vec<Vec<u16>> = vec![Vec::with_capacity(x.len()); levels.len()];
+    let mut decoded = Vec::with_capacity(x.len());
+    for &v in x {
+        let (idx, out) = code_levels(&levels, v);
+        if (i64::from(out) - v).abs() > tol {
+            return None;
+        }
+        for (l, i) in per_level.iter_mut().zip(idx) {
+            l.push(i);
+        }
+        decoded.push(out);
+    }
+    let bits = levels
+        .iter()
+        .map(|cb| x.len() as u64 * u64::from(cb.bits) + table_bits(cb))
+        .sum();
+    let mut levels = levels.into_iter().zip(per_level);
+    let (key, indices) = levels.next()?;
+    Some(Candidate {
         code: ChannelCode {
             key,
             delta: None,
-            rebase: Some(decoded.clone()),
-            indices: vec![0; x.len()],
+            levels: levels.collect(),
+            indices,
             decoded,
         },
         bits,
-    }
+    })
 }
 
 /// How key frames of a delta-coded channel are coded.
 enum KeyCode {
-    /// By a table.
+    /// By one table.
     Table(Codebook),
-    /// Re-based: exact `i32` values (SPEC.md §4.5).
-    Rebase,
+    /// In levels (SPEC.md §4.5), coarse first.
+    Levels(Vec<Codebook>),
 }
 
 fn table_bits(cb: &Codebook) -> u64 {
@@ -113,19 +172,14 @@ fn table_bits(cb: &Codebook) -> u64 {
 
 /// Delta coding with key frames every `k`; tries delta codebooks of
 /// growing size and keeps the first whose closed loop meets `tol`. Key
-/// frames no table covers are re-based if `rebase` allows.
-fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8, rebase: bool) -> Option<Candidate> {
+/// frames no table covers are coded in levels if `levels` allows.
+fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8, levels: bool) -> Option<Candidate> {
     let keys: Vec<i64> = x
         .iter()
         .enumerate()
         .filter(|(f, _)| is_key(*f, k))
         .map(|(_, &v)| v)
         .collect();
-    let key_cb = match quantizer::fit(&keys, tol, MAX_BITS) {
-        Some(cb) => KeyCode::Table(cb),
-        None if rebase => KeyCode::Rebase,
-        None => return None,
-    };
     let steps: Vec<i64> = (1..x.len())
         .filter(|&f| !is_key(f, k))
         .map(|f| x[f] - x[f - 1])
@@ -133,14 +187,46 @@ fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8, rebase: bool) -> Option<Ca
     if steps.is_empty() {
         return None;
     }
+    if let Some(key_cb) = quantizer::fit(&keys, tol, MAX_BITS) {
+        return delta_tables(x, tol, k, max_bits, &KeyCode::Table(key_cb), &steps);
+    }
+    if !levels {
+        return None;
+    }
+    // Levels a little finer than the tolerance, then exact: the delta frames
+    // after a key frame start closer to the motion (a key error near `tol`
+    // can leave the delta table, whose outer codes sit inside its steps'
+    // range, no room to come back).
+    for key_tol in [tol / 8, 0] {
+        let Some(levels) = fit_levels(&keys, key_tol, MAX_LEVELS) else {
+            continue;
+        };
+        let c = delta_tables(x, tol, k, max_bits, &KeyCode::Levels(levels), &steps);
+        if c.is_some() {
+            return c;
+        }
+    }
+    None
+}
+
+/// The closed loop of [`delta`] for its key coding, with delta codebooks of
+/// growing size: the first that meets `tol`.
+fn delta_tables(
+    x: &[i64],
+    tol: i64,
+    k: usize,
+    max_bits: u8,
+    key_code: &KeyCode,
+    steps: &[i64],
+) -> Option<Candidate> {
     // Delta codebooks with a tolerance below `tol` leave the closed loop room
     // to absorb the error carried from the previous frame.
     for frac in [2i64, 3, 4, 6, 8] {
         let step_tol = tol / frac;
-        let Some(cb) = quantizer::fit(&steps, step_tol, max_bits) else {
+        let Some(cb) = quantizer::fit(steps, step_tol, max_bits) else {
             continue;
         };
-        if let Some(c) = closed_loop(x, tol, k, &key_cb, &cb) {
+        if let Some(c) = closed_loop(x, tol, k, key_code, &cb) {
             return Some(c);
         }
     }
@@ -156,7 +242,11 @@ fn closed_loop(
 ) -> Option<Candidate> {
     let mut indices = Vec::with_capacity(x.len());
     let mut decoded = Vec::with_capacity(x.len());
-    let mut rows = Vec::new();
+    let finer = match key_code {
+        KeyCode::Levels(l) => l.len() - 1,
+        KeyCode::Table(_) => 0,
+    };
+    let mut level_indices: Vec<Vec<u16>> = vec![Vec::with_capacity(x.len()); finer];
     let mut prev: i32 = 0;
     for (f, &v) in x.iter().enumerate() {
         let (i, out) = if is_key(f, k) {
@@ -165,12 +255,18 @@ fn closed_loop(
                     let i = key_cb.nearest(v);
                     (i, key_cb.value(i) as i32)
                 }
-                KeyCode::Rebase => {
-                    rows.push(v as i32);
-                    (0, v as i32)
+                KeyCode::Levels(levels) => {
+                    let (idx, out) = code_levels(levels, v);
+                    for (l, &i) in level_indices.iter_mut().zip(&idx[1..]) {
+                        l.push(i);
+                    }
+                    (usize::from(idx[0]), out)
                 }
             }
         } else {
+            for l in &mut level_indices {
+                l.push(0);
+            }
             let i = cb.nearest(v - i64::from(prev));
             (i, prev.wrapping_add(cb.value(i) as i32))
         };
@@ -183,24 +279,20 @@ fn closed_loop(
     }
     let nk = (0..x.len()).filter(|&f| is_key(f, k)).count() as u64;
     let nd = x.len() as u64 - nk;
-    let (key, key_bits, rebase) = match key_code {
-        KeyCode::Table(key_cb) => (
-            key_cb.clone(),
-            nk * u64::from(key_cb.bits) + table_bits(key_cb),
-            None,
-        ),
-        KeyCode::Rebase => {
-            let key = zero_table();
-            let bits = nk * 32 + table_bits(&key);
-            (key, bits, Some(rows))
-        }
+    let (key, levels) = match key_code {
+        KeyCode::Table(key_cb) => (key_cb.clone(), Vec::new()),
+        KeyCode::Levels(l) => (l[0].clone(), l[1..].to_vec()),
     };
+    let key_bits: u64 = std::iter::once(&key)
+        .chain(&levels)
+        .map(|cb| nk * u64::from(cb.bits) + table_bits(cb))
+        .sum();
     let bits = key_bits + nd * u64::from(cb.bits) + table_bits(cb);
     Some(Candidate {
         code: ChannelCode {
             key,
             delta: Some(cb.clone()),
-            rebase,
+            levels: levels.into_iter().zip(level_indices).collect(),
             indices,
             decoded,
         },
@@ -210,12 +302,12 @@ fn closed_loop(
 
 /// Codes one channel for key interval `k`: the cheaper of its absolute
 /// coding `abs` (the same for every `k`) and delta coding. A channel no
-/// absolute table covers is delta-coded on re-based key frames, or at
-/// `k = 0` stored raw; `None` if `k > 0` and no delta table meets `tol`.
+/// absolute table covers is delta-coded on key frames in levels, or at
+/// `k = 0` coded in levels; `None` if that fails too.
 fn code_channel(x: &[i64], tol: i64, k: usize, abs: Option<&Candidate>) -> Option<Candidate> {
     let Some(abs) = abs else {
         return if k == 0 {
-            Some(raw(x))
+            absolute_levels(x, tol)
         } else {
             delta(x, tol, k, MAX_BITS, true)
         };
@@ -247,9 +339,9 @@ pub struct ToleranceTooTight {
 
 /// Codes every channel (`x[channel][frame]`) within `tol[channel]` (same
 /// units), trying each key interval of `intervals` and keeping the
-/// smallest section. With `0` among the intervals it always succeeds
-/// (channels no table covers are stored raw, SPEC.md §4.5); otherwise it
-/// fails on the first channel no interval can code.
+/// smallest section. With `0` among the intervals it codes any clip
+/// (channels no table covers in levels, SPEC.md §4.5); otherwise it fails
+/// on the first channel no interval can code.
 pub fn encode(
     x: &[Vec<i32>],
     tol: &[i64],
@@ -328,33 +420,26 @@ struct Entry {
     bits: u8,
     shift: u8,
     accumulate: bool,
-    rebase: bool,
+    /// Which of the channel's key levels (0 = `key`, SPEC.md §4.5).
+    level: u8,
     table: u16,
     base: i32,
 }
 
-impl Entry {
-    /// What entries of one group share.
-    fn group(&self) -> (u8, u8, bool, bool) {
-        (self.bits, self.shift, self.accumulate, self.rebase)
-    }
-}
-
-/// Groups entries by (width, shift, accumulate, rebase) in a stable order
-/// and returns the set's bytes and the entries in record order.
+/// Groups entries by (width, shift, accumulate) in a stable order and
+/// returns the set's bytes and the entries in record order.
 fn write_set(entries: &[Entry]) -> (Vec<u8>, Vec<Entry>) {
     let mut order: Vec<Entry> = entries.to_vec();
-    order.sort_by_key(|e| (e.group(), e.channel));
+    order.sort_by_key(|e| (e.bits, e.shift, e.accumulate, e.channel));
     let mut out = Vec::new();
     let mut groups = 0u16;
     out.extend_from_slice(&[0, 0]);
-    for run in order.chunk_by(|a, b| a.group() == b.group()) {
+    for run in
+        order.chunk_by(|a, b| (a.bits, a.shift, a.accumulate) == (b.bits, b.shift, b.accumulate))
+    {
         for chunk in run.chunks(usize::from(u16::MAX)) {
             let e0 = chunk[0];
-            let mut flags = if e0.accumulate { FLAG_ACCUMULATE } else { 0 };
-            if e0.rebase {
-                flags |= FLAG_REBASE;
-            }
+            let flags = if e0.accumulate { FLAG_ACCUMULATE } else { 0 };
             let mut header = [0u8; GROUP_HEADER_LEN];
             header[0] = e0.bits;
             header[1] = e0.shift | flags;
@@ -378,7 +463,7 @@ fn entry(channel: usize, cb: &Codebook, table: u16, accumulate: bool) -> Entry {
         bits: cb.bits,
         shift: cb.shift,
         accumulate,
-        rebase: false,
+        level: 0,
         table,
         base: cb.base,
     }
@@ -401,14 +486,25 @@ impl IndexEncoding {
                 )
             })
             .collect();
+        let level_offsets: Vec<Vec<u16>> = self
+            .channels
+            .iter()
+            .map(|ch| ch.levels.iter().map(|(cb, _)| pool.place(cb)).collect())
+            .collect();
         let mut key = Vec::new();
         let mut delta = Vec::new();
         for (c, (ch, &(key_off, delta_off))) in self.channels.iter().zip(&placed).enumerate() {
             pool.pad_for(key_off, ch.key.bits);
-            key.push(Entry {
-                rebase: ch.rebase.is_some(),
-                ..entry(c, &ch.key, key_off, false)
-            });
+            // Levels (§4.5) all accumulate: their order in the set is free.
+            let levels = !ch.levels.is_empty();
+            key.push(entry(c, &ch.key, key_off, levels));
+            for (l, ((cb, _), &off)) in ch.levels.iter().zip(&level_offsets[c]).enumerate() {
+                pool.pad_for(off, cb.bits);
+                key.push(Entry {
+                    level: l as u8 + 1,
+                    ..entry(c, cb, off, true)
+                });
+            }
             match (&ch.delta, delta_off) {
                 (Some(d), Some(off)) => {
                     pool.pad_for(off, d.bits);
@@ -435,10 +531,12 @@ impl IndexEncoding {
             let is_key = self.key_interval == 0 || f % usize::from(self.key_interval) == 0;
             let order = if is_key { &key_order } else { &delta_order };
             for e in order {
-                bits.write(
-                    u32::from(self.channels[usize::from(e.channel)].indices[f]),
-                    e.bits,
-                );
+                let ch = &self.channels[usize::from(e.channel)];
+                let index = match e.level {
+                    0 => ch.indices[f],
+                    l => ch.levels[usize::from(l) - 1].1[f],
+                };
+                bits.write(u32::from(index), e.bits);
             }
         }
         let mut out = Vec::new();
@@ -451,18 +549,6 @@ impl IndexEncoding {
         }
         for e in &pool.entries {
             out.extend_from_slice(&e.to_le_bytes());
-        }
-        // The rebase table (§4.5): a row per key frame, set order.
-        let rebased: Vec<&[i32]> = key_order
-            .iter()
-            .filter(|e| e.rebase)
-            .filter_map(|e| self.channels[usize::from(e.channel)].rebase.as_deref())
-            .collect();
-        let key_frames = rebased.first().map_or(0, |r| r.len());
-        for n in 0..key_frames {
-            for r in &rebased {
-                out.extend_from_slice(&r[n].to_le_bytes());
-            }
         }
         out.extend_from_slice(&bits.finish());
         Ok(out)
@@ -481,8 +567,6 @@ pub struct GroupInfo {
     pub bits: u8,
     /// Accumulating (delta) group.
     pub accumulate: bool,
-    /// Re-based key group (SPEC.md §4.5).
-    pub rebase: bool,
     /// Channels of the group.
     pub channels: Vec<u16>,
 }
@@ -498,8 +582,6 @@ pub struct SectionInfo {
     pub key: Vec<GroupInfo>,
     /// Groups of the delta set.
     pub delta: Vec<GroupInfo>,
-    /// Bytes of the rebase table (SPEC.md §4.5).
-    pub rebase_bytes: usize,
     /// Payload bytes.
     pub payload_bytes: usize,
 }
@@ -517,7 +599,6 @@ fn read_set(s: &[u8], at: &mut usize) -> Option<Vec<GroupInfo>> {
         groups.push(GroupInfo {
             bits: h[0],
             accumulate: h[1] & FLAG_ACCUMULATE != 0,
-            rebase: h[1] & FLAG_REBASE != 0,
             channels: body
                 .chunks_exact(ENTRY_LEN)
                 .map(|e| u16::from_le_bytes([e[0], e[1]]))
@@ -527,9 +608,8 @@ fn read_set(s: &[u8], at: &mut usize) -> Option<Vec<GroupInfo>> {
     Some(groups)
 }
 
-/// Reads the sets of an index section of a clip of `frames` frames that
-/// the decoder validated.
-pub fn inspect(section: &[u8], frames: u32) -> Option<SectionInfo> {
+/// Reads the sets of an index section that the decoder validated.
+pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
     let key_interval = u16::from_le_bytes(section.get(0..2)?.try_into().ok()?);
     let table_entries = u32::from_le_bytes(section.get(4..8)?.try_into().ok()?);
     let mut at = 8;
@@ -539,24 +619,12 @@ pub fn inspect(section: &[u8], frames: u32) -> Option<SectionInfo> {
     } else {
         Vec::new()
     };
-    let key_frames = if key_interval == 0 {
-        frames
-    } else {
-        frames.div_ceil(u32::from(key_interval))
-    };
-    let rebased: usize = key
-        .iter()
-        .filter(|g| g.rebase)
-        .map(|g| g.channels.len())
-        .sum();
-    let rebase_bytes = key_frames as usize * rebased * 4;
-    let payload_at = at + 2 * table_entries as usize + rebase_bytes;
+    let payload_at = at + 2 * table_entries as usize;
     Some(SectionInfo {
         key_interval,
         table_entries,
         key,
         delta,
-        rebase_bytes,
         payload_bytes: section.len().saturating_sub(payload_at),
     })
 }
@@ -571,8 +639,9 @@ pub struct DescriptorInfo {
     pub delta_bits: Option<u8>,
     /// True if delta frames accumulate.
     pub accumulate: bool,
-    /// True if key frames are re-based (SPEC.md §4.5).
-    pub rebase: bool,
+    /// Key-set entries of the channel: more than 1 for key frames in
+    /// levels (SPEC.md §4.5).
+    pub key_levels: u8,
 }
 
 impl SectionInfo {
@@ -583,15 +652,15 @@ impl SectionInfo {
                 key_bits: 0,
                 delta_bits: None,
                 accumulate: false,
-                rebase: false,
+                key_levels: 0,
             };
             n
         ];
         for g in &self.key {
             for &c in &g.channels {
                 if let Some(d) = out.get_mut(usize::from(c)) {
-                    d.key_bits = g.bits;
-                    d.rebase = g.rebase;
+                    d.key_bits += g.bits;
+                    d.key_levels = d.key_levels.saturating_add(1);
                 }
             }
         }
@@ -634,12 +703,9 @@ impl SectionInfo {
             delta as f64 / n as f64,
             n - unchanged - deltas
         );
-        let rebased = chans.iter().filter(|c| c.rebase).count();
-        if rebased > 0 {
-            s += &format!(
-                "  re-based key frames (SPEC §4.5): {rebased} channels, rebase table {} bytes\n",
-                self.rebase_bytes
-            );
+        let levelled = chans.iter().filter(|c| c.key_levels > 1).count();
+        if levelled > 0 {
+            s += &format!("  key frames in levels (SPEC §4.5): {levelled} channels\n");
         }
         if channels {
             for (c, (ch, d)) in header.channels().zip(&chans).enumerate() {
@@ -648,7 +714,11 @@ impl SectionInfo {
                     ch.joint_name,
                     ch.kind.name(),
                     d.key_bits,
-                    if d.rebase { " + i32 (re-based)" } else { "" },
+                    if d.key_levels > 1 {
+                        format!(" in {} levels", d.key_levels)
+                    } else {
+                        String::new()
+                    },
                     d.delta_bits.map_or("-".to_string(), |b| format!("{b:2}")),
                     if d.accumulate { " (acc)" } else { "" },
                     ch.min,

@@ -104,9 +104,7 @@ pub fn describe_section(
     channels: bool,
 ) -> Option<String> {
     match id {
-        consts::SECTION_CODEC_INDEX => {
-            Some(index::inspect(section, header.frame_count())?.describe(header, channels))
-        }
+        consts::SECTION_CODEC_INDEX => Some(index::inspect(section)?.describe(header, channels)),
         consts::SECTION_CODEC_PCA_SPLINE => Some(pca_spline::inspect(section)?.describe()),
         consts::SECTION_CODEC_PREDICTIVE => Some(predictive::inspect(section)?.describe()),
         _ => None,

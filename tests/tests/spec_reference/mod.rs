@@ -58,7 +58,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
     let (frame_time_ns, frame_count, channels) = header_counts(header_id, header);
     let (id, section) = codec.expect("a codec section");
     let codec = match id {
-        0x10 => Codec::Index(Index::parse(section, channels, frame_count)),
+        0x10 => Codec::Index(Index::parse(section, channels)),
         0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
         _ => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
     };
@@ -233,25 +233,22 @@ pub struct Index {
     pub key_set: Vec<IndexGroup>,
     pub delta_set: Vec<IndexGroup>,
     pub pool: Vec<i32>,
-    /// §4.5: one row per key frame, `R` values each.
-    pub rebase: Vec<Vec<i32>>,
     pub payload: Vec<u8>,
 }
 
-/// A group of a set: `(bits, shift, accumulate, rebase)` and its entries
+/// A group of a set: `(bits, shift, accumulate)` and its entries
 /// `(channel, table, base)`.
 #[derive(Debug)]
 pub struct IndexGroup {
     pub bits: u32,
     pub shift: u32,
     pub accumulate: bool,
-    pub rebase: bool,
     pub entries: Vec<(usize, usize, i32)>,
 }
 
 impl Index {
     /// §4.1, §4.2.
-    pub fn parse(section: &[u8], channels: usize, frames: u32) -> Index {
+    pub fn parse(section: &[u8], channels: usize) -> Index {
         let mut r = Reader::new(section);
         let u16_le = |r: &mut Reader<'_>| u16::from_le_bytes([r.u8(), r.u8()]);
         let key_interval = u32::from(u16_le(&mut r));
@@ -263,7 +260,7 @@ impl Index {
                 .map(|_| {
                     let bits = u32::from(r.u8());
                     let flags = r.u8();
-                    assert!(bits <= 12 && flags & 0x20 == 0 && u32::from(flags & 0x1F) <= 24);
+                    assert!(bits <= 12 && flags & 0x60 == 0 && u32::from(flags & 0x1F) <= 24);
                     let count = u16_le(r);
                     let entries = (0..count)
                         .map(|_| {
@@ -278,39 +275,21 @@ impl Index {
                         bits,
                         shift: u32::from(flags & 0x1F),
                         accumulate: flags & 0x80 != 0,
-                        rebase: flags & 0x40 != 0,
                         entries,
                     }
                 })
                 .collect()
         };
         let key_set = set(&mut r);
-        assert!(key_set.iter().all(|g| !g.accumulate));
+        // §4.2: at least C entries (levels, §4.5, name a channel again).
+        assert!(key_set.iter().map(|g| g.entries.len()).sum::<usize>() >= channels);
         let delta_set = if key_interval > 0 {
             set(&mut r)
         } else {
             Vec::new()
         };
-        assert!(delta_set.iter().all(|g| !g.rebase));
         let pool = (0..t)
             .map(|_| i32::from(i16::from_le_bytes([r.u8(), r.u8()])))
-            .collect();
-        let keys = if key_interval == 0 {
-            frames
-        } else {
-            frames.div_ceil(key_interval)
-        };
-        let big_r: usize = key_set
-            .iter()
-            .filter(|g| g.rebase)
-            .map(|g| g.entries.len())
-            .sum();
-        let rebase = (0..keys)
-            .map(|_| {
-                (0..big_r)
-                    .map(|_| i32::from_le_bytes(r.take(4).try_into().unwrap()))
-                    .collect()
-            })
             .collect();
         let payload = r.bytes[r.pos..].to_vec();
         Index {
@@ -318,7 +297,6 @@ impl Index {
             key_set,
             delta_set,
             pool,
-            rebase,
             payload,
         }
     }
@@ -355,15 +333,6 @@ impl Index {
                     } else {
                         v
                     };
-                }
-            }
-            if key {
-                // §4.5: then each rebase entry adds its row's value.
-                let n = f.checked_div(k).unwrap_or(f);
-                let rebased = self.key_set.iter().filter(|g| g.rebase);
-                let channels = rebased.flat_map(|g| g.entries.iter().map(|e| e.0));
-                for (j, c) in channels.enumerate() {
-                    value[c] = value[c].wrapping_add(self.rebase[n][j]);
                 }
             }
             out.push(value.clone());
@@ -959,7 +928,7 @@ pub fn parse_show(bytes: &[u8]) -> Vec<(String, Clip)> {
         }
         let (id, section) = sections[codec_at];
         let codec = match id {
-            0x10 => Codec::Index(Index::parse(section, channels, frame_count)),
+            0x10 => Codec::Index(Index::parse(section, channels)),
             0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
             0x12 => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
             id => panic!("clip {name}: section {id:#04x} is no codec"),
