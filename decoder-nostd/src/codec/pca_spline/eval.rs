@@ -118,10 +118,7 @@ impl<'i, 'o> Dst<'i, 'o> {
     #[inline(always)]
     pub(super) fn write_k<const K: usize>(self, a: [i32; K], means: &[u8], basis: &[u8], ms: u32) {
         let rows = means.chunks_exact(2).zip(basis.chunks_exact(K));
-        let value = |m: &[u8], row: &[u8]| match <&[u8; K]>::try_from(row) {
-            Ok(row) => channel(mean_of(m), ms, row.iter().zip(a.iter())),
-            Err(_) => 0,
-        };
+        let value = |m: &[u8], row: &[u8]| row_value(&a, ms, m, row);
         match self {
             // A single curve (root translations, heading): one channel —
             // no loop to set up.
@@ -150,6 +147,17 @@ impl<'i, 'o> Dst<'i, 'o> {
                 }
             }
         }
+    }
+}
+
+/// One channel of a `K`-component group from its mean bytes `m` and basis
+/// row `row` (0 if the row is short). Always inlined: LLVM left it out of
+/// line for `K ≥ 4`, a call per channel.
+#[inline(always)]
+fn row_value<const K: usize>(a: &[i32; K], ms: u32, m: &[u8], row: &[u8]) -> i32 {
+    match <&[u8; K]>::try_from(row) {
+        Ok(row) => channel(mean_of(m), ms, row.iter().zip(a.iter())),
+        Err(_) => 0,
     }
 }
 
