@@ -1,9 +1,11 @@
 //! `keyframe-linear`: what game engines default to — per channel, a few key
 //! frames and linear interpolation between them.
 //!
-//! Key values are quantised with the step `max(1, tol_c)` (half the
-//! channel's tolerance goes to the keys: a key is within `tol_c / 2` of its
-//! frame's value). Reduction is greedy from the first frame: from each key
+//! Key values are quantised with the step `max(1, ⌊tol_c / 2⌋)` (a key is
+//! within `tol_c / 4` of its frame's value, the rest of the tolerance is
+//! left to the interpolation; measured on cmu and iclone-cmu at 1°, 20 mm
+//! and 50 mm + ARMS 10 mm this step gives 1–4 % fewer bytes than `tol_c`
+//! and 8–13 % fewer than `2·tol_c + 1`). Reduction is greedy from the first frame: from each key
 //! the next one is the furthest frame such that the line between the two
 //! (quantised) keys, rounded as the decoder rounds it, is within `tol_c` of
 //! every frame between them — a slope cone over the frames rules out what
@@ -25,7 +27,7 @@ const NAME: &str = "keyframe-linear";
 
 /// The quantisation step of a channel's key values for its tolerance.
 pub fn key_step(tol: i64) -> i64 {
-    tol.clamp(1, i64::from(i32::MAX))
+    (tol / 2).clamp(1, i64::from(i32::MAX))
 }
 
 /// A key: its frame and its quantised value (`q · step` decoded).
