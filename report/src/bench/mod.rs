@@ -256,7 +256,6 @@ struct RowOf<'a> {
 }
 
 impl RowOf<'_> {
-    #[allow(clippy::too_many_arguments)] // one row's fields, named at each call
     fn row(
         &self,
         method: Method,
