@@ -197,7 +197,7 @@ pub fn rate_distortion_plot(path: &Path, rows: &[Row]) -> Result<(), PlotError> 
 }
 
 /// The distinct values of `key` over `rows`, in the order they first appear.
-fn first_seen<'a>(rows: &'a [Row], key: fn(&Row) -> &str) -> Vec<&'a str> {
+fn first_seen(rows: &[Row], key: fn(&Row) -> &str) -> Vec<&str> {
     let mut out: Vec<&str> = Vec::new();
     for r in rows {
         let k = key(r);

@@ -81,7 +81,7 @@ pub fn reduce(ch: &[i32], tol: i64) -> Vec<Key> {
         let va = value(at.q, step) as f64;
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
         let mut candidates = Vec::new();
-        for f in at.frame + 1..n {
+        for (f, &v) in ch.iter().enumerate().skip(at.frame + 1) {
             let d = (f - at.frame) as f64;
             let k = key(f);
             let slope = (value(k.q, step) as f64 - va) / d;
@@ -89,7 +89,7 @@ pub fn reduce(ch: &[i32], tol: i64) -> Vec<Key> {
             if lo <= slope && slope <= hi {
                 candidates.push(k);
             }
-            let v = f64::from(ch[f]);
+            let v = f64::from(v);
             lo = lo.max((v - slack - va) / d);
             hi = hi.min((v + slack - va) / d);
             if lo > hi {
@@ -235,7 +235,7 @@ mod tests {
         let smooth: Vec<i32> = (0..300)
             .map(|f| (20_000.0 * (f as f64 / 40.0).sin()) as i32)
             .collect();
-        let noisy: Vec<i32> = (0..300).map(|f| ((f * 7919) % 101) as i32 * 10).collect();
+        let noisy: Vec<i32> = (0..300).map(|f| (f * 7919) % 101 * 10).collect();
         let jump: Vec<i32> = (0..300)
             .map(|f| if f < 150 { -90_000 } else { 90_000 })
             .collect();
