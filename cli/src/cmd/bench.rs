@@ -51,12 +51,7 @@ impl From<BenchCodecArg> for Method {
     }
 }
 
-/// Sizes: "bytes" and "ratio f32" include the skeleton header (a clip: the
-/// whole .mcb file; a baseline: its bytes + the header our clip of the same
-/// input carries); "w/o header" and bits/ch/frame leave it out on both
-/// sides. Every error is measured on the motion decoded from the bytes, by
-/// the encoder's own metrics; each baseline but raw16 is tuned by the
-/// encoder's own tolerance search until the same bound holds.
+/// The arguments (the command's help text is its doc in `main.rs`).
 #[derive(clap::Args)]
 pub struct Args {
     /// Motion files or folders (.bvh, .amc with its .asf, .c3d marker files;
