@@ -776,3 +776,39 @@ fn bench_reads_a_c3d_marker_file() {
         text(&o.stderr)
     );
 }
+
+/// `auto` taken from the three codecs' rows (when they are asked for too)
+/// is the clip `auto` alone encodes: same codec, same bytes.
+#[test]
+fn bench_auto_from_the_codecs_rows_is_the_encoders_auto() {
+    let d = out_dir("bench-auto");
+    let bvh = d.join("tiny.bvh");
+    std::fs::write(&bvh, tiny_bvh()).expect("write");
+    let bvh = bvh.to_str().unwrap();
+    let auto_row = |args: &[&str]| {
+        let mut all = vec!["bench", bvh, "--max-error", "20mm"];
+        all.extend_from_slice(args);
+        let o = mocap(&all);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let out = text(&o.stdout);
+        let row = out
+            .lines()
+            .find(|l| l.starts_with("| bench-auto | tiny.bvh | auto ("))
+            .unwrap_or_else(|| panic!("{out}"))
+            .to_string();
+        // folder, file, codec (chosen), bound, frames×ch, bytes.
+        row.split(" | ").take(6).collect::<Vec<_>>().join(" | ")
+    };
+    let alone = auto_row(&["--codec", "auto"]);
+    let derived = auto_row(&[
+        "--codec",
+        "index",
+        "--codec",
+        "pca-spline",
+        "--codec",
+        "predictive",
+        "--codec",
+        "auto",
+    ]);
+    assert_eq!(alone, derived);
+}

@@ -256,6 +256,18 @@ struct RowOf<'a> {
 }
 
 impl RowOf<'_> {
+    /// The row of one of our clips.
+    fn clip(&self, method: Method, enc: &Encoded, encode_seconds: f64) -> Row {
+        self.row(
+            method,
+            enc.codec.name(),
+            enc.metrics.clone(),
+            clip_header_bytes(&enc.bytes),
+            enc.key_interval,
+            encode_seconds,
+        )
+    }
+
     fn row(
         &self,
         method: Method,
@@ -295,6 +307,20 @@ impl RowOf<'_> {
             encode_seconds,
         }
     }
+}
+
+/// `auto` from the rows of the three codecs it tries ([`encode::smallest`];
+/// its time the sum of theirs), `None` while one of them is missing.
+fn auto_from(ours: &[(CodecChoice, Encoded, f64)]) -> Option<Result<(Encoded, f64), EncodeError>> {
+    let picked: Vec<&(CodecChoice, Encoded, f64)> = AUTO_CODECS
+        .iter()
+        .filter_map(|c| ours.iter().find(|o| o.0 == *c))
+        .collect();
+    if picked.len() < AUTO_CODECS.len() {
+        return None;
+    }
+    let secs = picked.iter().map(|o| o.2).sum();
+    Some(encode::smallest(picked.iter().map(|o| (o.0, Ok(o.1.clone())))).map(|e| (e, secs)))
 }
 
 /// Runs the bench; progress goes to stderr. `bounds` are `+`-joined specs
@@ -343,48 +369,19 @@ pub fn run(
             for &method in methods {
                 match method {
                     Method::Codec(CodecChoice::Auto) if derive_auto => {
-                        let picked: Vec<&(CodecChoice, Encoded, f64)> = AUTO_CODECS
-                            .iter()
-                            .filter_map(|c| ours.iter().find(|o| o.0 == *c))
-                            .collect();
-                        if picked.len() < AUTO_CODECS.len() {
-                            // The codecs come later in the list: encode now.
-                            let (enc, secs) = source.encode(CodecChoice::Auto, bound)?;
-                            rows.push(of.row(
-                                method,
-                                enc.codec.name(),
-                                enc.metrics.clone(),
-                                clip_header_bytes(&enc.bytes),
-                                enc.key_interval,
-                                secs,
-                            ));
-                            continue;
-                        }
-                        let secs = picked.iter().map(|o| o.2).sum();
-                        let enc = encode::smallest(picked.iter().map(|o| (o.0, Ok(o.1.clone()))))
-                            .map_err(|source| BenchError::Encode {
-                            file: file.clone(),
-                            source,
-                        })?;
-                        rows.push(of.row(
-                            method,
-                            enc.codec.name(),
-                            enc.metrics.clone(),
-                            clip_header_bytes(&enc.bytes),
-                            enc.key_interval,
-                            secs,
-                        ));
+                        let (enc, secs) = match auto_from(&ours) {
+                            Some(picked) => picked.map_err(|source| BenchError::Encode {
+                                file: file.clone(),
+                                source,
+                            })?,
+                            // The three codecs come later in the list.
+                            None => source.encode(CodecChoice::Auto, bound)?,
+                        };
+                        rows.push(of.clip(method, &enc, secs));
                     }
                     Method::Codec(codec) => {
                         let (enc, secs) = source.encode(codec, bound)?;
-                        rows.push(of.row(
-                            method,
-                            enc.codec.name(),
-                            enc.metrics.clone(),
-                            clip_header_bytes(&enc.bytes),
-                            enc.key_interval,
-                            secs,
-                        ));
+                        rows.push(of.clip(method, &enc, secs));
                         ours.push((codec, enc, secs));
                     }
                     Method::Baseline(b) => {
@@ -413,14 +410,8 @@ pub fn run(
                         if !b.tuned() {
                             raw16 = Some((coded.clone(), secs));
                         }
-                        rows.push(of.row(
-                            method,
-                            b.name(),
-                            coded.metrics,
-                            baseline_header,
-                            0,
-                            secs,
-                        ));
+                        let row = of.row(method, b.name(), coded.metrics, baseline_header, 0, secs);
+                        rows.push(row);
                     }
                 }
             }
