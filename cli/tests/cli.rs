@@ -724,6 +724,7 @@ fn bench_prints_baselines_beside_the_codecs() {
     let codecs: Vec<&str> = out
         .lines()
         .skip(2)
+        .take_while(|l| !l.is_empty())
         .map(|l| l.split(" | ").nth(1).unwrap_or(""))
         .collect();
     assert_eq!(
@@ -737,6 +738,17 @@ fn bench_prints_baselines_beside_the_codecs() {
         ],
         "{out}"
     );
+    // Then our smallest against the smallest tuned baseline.
+    let versus = out.split("\n\n").nth(1).unwrap_or_else(|| panic!("{out}"));
+    assert!(
+        versus.starts_with(
+            "| folder | bound | ours: smallest total bytes | best baseline (not raw16) | "
+        ),
+        "{out}"
+    );
+    assert_eq!(versus.lines().count(), 3, "{out}");
+    assert!(versus.contains("| bench | 20mm | "), "{out}");
+    assert!(!versus.contains("raw16 |"), "{out}");
 }
 
 /// `mocap bench` reads a C3D marker file: marker rows at a length bound,

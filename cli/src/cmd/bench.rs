@@ -69,7 +69,9 @@ pub struct Args {
     /// codecs.
     #[arg(long)]
     baselines: bool,
-    /// Print only the per-folder totals, not every file's row.
+    /// Print only the per-folder totals, not every file's row (then, with
+    /// baselines and codecs, the smallest of each side per folder and
+    /// bound, in both cases).
     #[arg(long)]
     summary: bool,
     /// Write the rows as JSON here too.
@@ -103,6 +105,10 @@ pub fn run(a: Args) -> super::Result {
         print!("{}", bench::summary(&rows));
     } else {
         print!("{}", bench::markdown(&rows));
+    }
+    let versus = bench::versus(&rows);
+    if !versus.is_empty() {
+        print!("\n{versus}");
     }
     if let Some(p) = &a.json {
         write(p, serde_json::to_string_pretty(&rows)?.as_bytes())?;

@@ -444,6 +444,88 @@ pub fn markdown(rows: &[Row]) -> String {
     s + &summary(rows)
 }
 
+/// Whether a row is a baseline's.
+fn is_baseline(r: &Row) -> bool {
+    Baseline::ALL.iter().any(|b| b.name() == r.codec)
+}
+
+/// Per folder and bound (as they first appear): the smallest total of our
+/// codecs against the smallest total of the tuned baselines, with the
+/// header and without it (each side's smallest without it). Empty unless
+/// the rows hold both.
+pub fn versus(rows: &[Row]) -> String {
+    struct Total<'a> {
+        codec: &'a str,
+        with: usize,
+        without: usize,
+    }
+    /// The first of the smallest: `auto` names a codec when it ties one.
+    fn best<'a, 'b>(v: &[&'a Total<'b>], f: fn(&Total) -> usize) -> Option<&'a Total<'b>> {
+        v.iter()
+            .copied()
+            .reduce(|a, t| if f(t) < f(a) { t } else { a })
+    }
+    let groups = summary_groups(rows);
+    let totals: Vec<(&Row, Total)> = groups
+        .iter()
+        .filter_map(|sel| {
+            let first = *sel.first()?;
+            let t = Total {
+                codec: &first.codec,
+                with: sel.iter().map(|r| r.metrics.bytes).sum(),
+                without: sel.iter().map(|r| r.bytes_without_header()).sum(),
+            };
+            Some((first, t))
+        })
+        .collect();
+    let mut keys: Vec<(&str, &str)> = Vec::new();
+    for (r, _) in &totals {
+        if !keys.contains(&(r.group.as_str(), r.bound.as_str())) {
+            keys.push((&r.group, &r.bound));
+        }
+    }
+    let mut s = String::new();
+    for (g, b) in keys {
+        let side = |baseline: bool| {
+            totals
+                .iter()
+                .filter(|(r, _)| r.group == g && r.bound == b && is_baseline(r) == baseline)
+                .filter(|(r, _)| r.codec != Baseline::Raw16.name())
+                .map(|(_, t)| t)
+                .collect::<Vec<_>>()
+        };
+        let (ours, theirs) = (side(false), side(true));
+        let (Some(o), Some(t), Some(ow), Some(tw)) = (
+            best(&ours, |t| t.with),
+            best(&theirs, |t| t.with),
+            best(&ours, |t| t.without),
+            best(&theirs, |t| t.without),
+        ) else {
+            continue;
+        };
+        let more = |a: usize, b: usize| 100.0 * (a as f64 / b.max(1) as f64 - 1.0);
+        s += &format!(
+            "| {g} | {b} | {} {} | {} {} | {:+.1} % | {} {} | {} {} | {:+.1} % |\n",
+            o.with,
+            o.codec,
+            t.with,
+            t.codec,
+            more(t.with, o.with),
+            ow.without,
+            ow.codec,
+            tw.without,
+            tw.codec,
+            more(tw.without, ow.without),
+        );
+    }
+    if s.is_empty() {
+        return s;
+    }
+    String::from(
+        "| folder | bound | ours: smallest total bytes | best baseline (not raw16) | baseline larger by | ours w/o header | best baseline w/o header | larger by |\n|---|---|---|---|---|---|---|---|\n",
+    ) + &s
+}
+
 /// Per folder, bound and method (in the order they first appear): totals
 /// over the folder's files. Ratios are total f32 bytes over total bytes
 /// with and without the header; bits per channel per frame are without it.
