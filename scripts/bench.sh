@@ -9,13 +9,51 @@
 #     (`mocap show build`), the index table pools of the iclone show and what sharing them could
 #     save (encoder/examples/show_pools.rs), and the blend safety figures of every transition of
 #     the CMU servo and demo shows (tests/tests/show_blend_safety.rs).
+#  5. against what users pick instead (BENCHMARKS.md "Against what users pick instead
+#     (issue 15)"): our codecs beside raw 16-bit frames, quantisation + zstd / xz and
+#     keyframe-linear reduction, per-folder totals, on cmu, cmu-long, iclone-cmu and the
+#     asf-amc .amc files at 1°, 20 mm and 50 mm + ARMS 10 mm, and the C3D marker files at
+#     5 mm and 20 mm (the picture: target/bench/baselines.png).
+#  6. the readers' throughput and a folder of 500 files (encoder/examples/read_folder.rs).
 #   bash scripts/bench.sh [CLIP.bvh]   (default: $MOCAP_CORPUS/cmu/35_01.bvh)
+#   bash scripts/bench.sh --baselines  (part 5 alone: no QEMU, no cross toolchain)
 #   Failing steps print why (their output is in target/bench/steps.log).
 set -euo pipefail
 # shellcheck source=scripts/toolchain.sh
 source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
 cd "$MOCAP_REPO_ROOT"
 corpus="${MOCAP_CORPUS:-../shared/data}"
+
+# Part 5: the tables of BENCHMARKS.md "Against what users pick instead (issue 15)".
+baselines_part() {
+    local mocap=$1 out=$2
+    local codecs=(--codec index --codec pca-spline --codec predictive --codec auto --baselines)
+    echo "## Against what users pick instead (issue 15)"
+    echo
+    echo "mocap bench $corpus/cmu $corpus/cmu-long $corpus/iclone-cmu $corpus/asf-amc/*.amc ${codecs[*]} --max-error 1deg --max-error 20mm --max-error 50mm+arms:10mm --summary"
+    echo
+    /usr/bin/time -f "wall time: %e s" -o "$out/baselines.time" \
+        "$mocap" bench "$corpus/cmu" "$corpus/cmu-long" "$corpus/iclone-cmu" "$corpus"/asf-amc/*.amc \
+        "${codecs[@]}" --max-error 1deg --max-error 20mm --max-error 50mm+arms:10mm --summary \
+        --json "$out/baselines.json" --plot "$out/baselines.png" 2>"$out/baselines.log"
+    cat "$out/baselines.time"
+    echo
+    echo "mocap bench $corpus/c3d ${codecs[*]} --max-error 5mm --max-error 20mm --summary"
+    echo
+    /usr/bin/time -f "wall time: %e s" -o "$out/baselines-c3d.time" \
+        "$mocap" bench "$corpus/c3d" "${codecs[@]}" --max-error 5mm --max-error 20mm --summary \
+        --json "$out/baselines-c3d.json" 2>"$out/baselines-c3d.log"
+    cat "$out/baselines-c3d.time"
+    echo
+}
+
+if [ "${1:-}" = --baselines ]; then
+    cargo build --release -q -p mocap-cli
+    mkdir -p target/bench
+    baselines_part "${CARGO_TARGET_DIR:-target}/release/mocap" target/bench
+    exit 0
+fi
+
 mocap_toolchain_setup >&2
 cargo build --release -q -p mocap-cli
 cargo build --release -q -p mocap-encoder --example show_pools
@@ -195,3 +233,5 @@ echo "-- the folder of 500:"
 /usr/bin/time -f "mocap bench (index, 1deg) over the 500 files: %e s wall, %M KB peak RSS" \
     "$mocap" bench "$folder" --codec index --max-error 1deg 2>&1 >/dev/null | tail -1
 echo '```'
+echo
+baselines_part "$mocap" "$out"

@@ -29,7 +29,14 @@ enum Command {
     Info(cmd::info::Args),
     /// Decode a clip with the no_std decoder and measure it against its source.
     Eval(cmd::eval::Args),
-    /// Rate–distortion table over files or folders of BVH.
+    /// Rate–distortion table over motion files or folders: our codecs beside what users pick instead.
+    ///
+    /// Sizes: "bytes" and "ratio f32" include the skeleton header (a clip: the whole .mcb
+    /// file; a baseline: its bytes + the header our clip of the same input carries); "w/o
+    /// header" and bits/ch/frame leave it out on both sides. Every error is measured on the
+    /// motion decoded from the bytes, by the encoder's own metrics; each baseline but raw16 is
+    /// tuned by the encoder's own tolerance search until the same bound holds ("holds" says
+    /// whether it does). The baselines are size references, not MCU bitstreams.
     Bench(cmd::bench::Args),
     /// Play a clip through a servo rig: servo-controller commands to a port or a file.
     Play(cmd::play::Args),

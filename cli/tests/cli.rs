@@ -603,3 +603,224 @@ fn encode_info_eval_a_c3d_marker_file() {
         "{err}"
     );
 }
+
+/// A tiny generated BVH: a root with position and rotation channels, an
+/// arm, an End Site, 40 frames of smooth motion in centimetres.
+fn tiny_bvh() -> String {
+    let mut s = String::from(
+        "HIERARCHY\nROOT Hips\n{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n\tJOINT Arm\n\t{\n\t\tOFFSET 0 40 0\n\t\tCHANNELS 3 Zrotation Yrotation Xrotation\n\t\tEnd Site\n\t\t{\n\t\t\tOFFSET 0 30 0\n\t\t}\n\t}\n}\nMOTION\nFrames: 40\nFrame Time: 0.0333333\n",
+    );
+    for f in 0..40 {
+        let t = f as f64 / 30.0;
+        let v = [
+            20.0 * t,
+            90.0 + (3.0 * t).sin(),
+            0.0,
+            10.0 * t.sin(),
+            5.0,
+            -3.0 * t,
+            40.0 * (2.0 * t).sin(),
+            0.0,
+            25.0 * t.cos(),
+        ];
+        let line: Vec<String> = v.iter().map(|x| format!("{x:.4}")).collect();
+        s += &line.join(" ");
+        s.push('\n');
+    }
+    s
+}
+
+/// `mocap bench` with baselines beside a codec on a tiny BVH: the columns,
+/// a row per method and bound, the summary with `--summary`, the JSON rows
+/// with the header convention, and the plot.
+#[test]
+fn bench_prints_baselines_beside_the_codecs() {
+    let d = out_dir("bench");
+    let bvh = d.join("tiny.bvh");
+    std::fs::write(&bvh, tiny_bvh()).expect("write");
+    let bvh = bvh.to_str().unwrap();
+    let json = d.join("rows.json");
+    let plot = d.join("rd.svg");
+    let o = mocap(&[
+        "bench",
+        bvh,
+        "--codec",
+        "index",
+        "--codec",
+        "raw16",
+        "--codec",
+        "zstd",
+        "--codec",
+        "xz",
+        "--codec",
+        "keyframe-linear",
+        "--max-error",
+        "1deg",
+        "--max-error",
+        "50mm+arms:10mm",
+        "--json",
+        json.to_str().unwrap(),
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(
+        out.starts_with("| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio f32 w/o header | ratio file | bits/ch/frame | ARMS mm | max mm | d % | angle RMS ° | angle max ° | holds | K | encode s |\n"),
+        "{out}"
+    );
+    assert!(out.contains("| folder | codec | bound | files | total f32 bytes | total bytes | ratio f32 | ratio f32 w/o header | bits/ch/frame | worst ARMS mm | worst max mm | worst angle max ° | mean d % | bound holds | encode s |\n"), "{out}");
+    for method in [
+        "index",
+        "raw16",
+        "quant+zstd",
+        "quant+xz",
+        "keyframe-linear",
+    ] {
+        for bound in ["1deg", "50mm+arms:10mm"] {
+            let row = format!("| bench | tiny.bvh | {method} | {bound} | 40×9 | ");
+            assert!(out.contains(&row), "{row}\n{out}");
+            let total = format!("| bench | {method} | {bound} | 1 | 1440 | ");
+            assert!(out.contains(&total), "{total}\n{out}");
+        }
+    }
+    assert!(!out.contains("**no**"), "{out}");
+    let rows: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).expect("json")).expect("json rows");
+    let rows = rows.as_array().expect("rows");
+    assert_eq!(rows.len(), 10);
+    for r in rows {
+        let (bytes, header) = (
+            r["metrics"]["bytes"].as_u64().unwrap(),
+            r["header_bytes"].as_u64().unwrap(),
+        );
+        assert!(header > 0 && bytes > header, "{r}");
+        let without = 1440.0 / (bytes - header) as f64;
+        assert!((r["ratio_f32_without_header"].as_f64().unwrap() - without).abs() < 1e-9);
+    }
+    // A baseline is charged the header our clip of the same input carries.
+    let header_of = |codec: &str| {
+        rows.iter()
+            .find(|r| r["codec"] == codec)
+            .map(|r| r["header_bytes"].as_u64().unwrap())
+            .unwrap()
+    };
+    assert!(header_of("index").abs_diff(header_of("quant+zstd")) <= 4);
+    assert!(std::fs::read_to_string(&plot)
+        .expect("plot")
+        .contains("keyframe-linear"));
+
+    // --baselines --summary: the totals only, every baseline after the codec.
+    let o = mocap(&[
+        "bench",
+        bvh,
+        "--baselines",
+        "--summary",
+        "--max-error",
+        "20mm",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    let codecs: Vec<&str> = out
+        .lines()
+        .skip(2)
+        .take_while(|l| !l.is_empty())
+        .map(|l| l.split(" | ").nth(1).unwrap_or(""))
+        .collect();
+    assert_eq!(
+        codecs,
+        [
+            "index",
+            "raw16",
+            "quant+zstd",
+            "quant+xz",
+            "keyframe-linear"
+        ],
+        "{out}"
+    );
+    // Then our smallest against the smallest tuned baseline.
+    let versus = out.split("\n\n").nth(1).unwrap_or_else(|| panic!("{out}"));
+    assert!(
+        versus.starts_with(
+            "| folder | bound | ours: smallest total bytes | best baseline (not raw16) | "
+        ),
+        "{out}"
+    );
+    assert_eq!(versus.lines().count(), 3, "{out}");
+    assert!(versus.contains("| bench | 20mm | "), "{out}");
+    assert!(!versus.contains("raw16 |"), "{out}");
+}
+
+/// `mocap bench` reads a C3D marker file: marker rows at a length bound,
+/// the angle bound skipped with a note.
+#[test]
+fn bench_reads_a_c3d_marker_file() {
+    let d = out_dir("bench-c3d");
+    let c3d = d.join("tiny.c3d");
+    std::fs::write(&c3d, tiny_c3d()).expect("write");
+    let o = mocap(&[
+        "bench",
+        c3d.to_str().unwrap(),
+        "--codec",
+        "predictive",
+        "--codec",
+        "keyframe-linear",
+        "--max-error",
+        "1deg",
+        "--max-error",
+        "2mm",
+        "--summary",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("| bench-c3d | predictive | 2mm | 1 | 96 | "),
+        "{out}"
+    );
+    assert!(
+        out.contains("| bench-c3d | keyframe-linear | 2mm | 1 | 96 | "),
+        "{out}"
+    );
+    assert!(!out.contains("1deg"), "{out}");
+    assert!(
+        text(&o.stderr).contains("skipped at 1deg: a marker clip has no rotation channels"),
+        "{}",
+        text(&o.stderr)
+    );
+}
+
+/// `auto` taken from the three codecs' rows (when they are asked for too)
+/// is the clip `auto` alone encodes: same codec, same bytes.
+#[test]
+fn bench_auto_from_the_codecs_rows_is_the_encoders_auto() {
+    let d = out_dir("bench-auto");
+    let bvh = d.join("tiny.bvh");
+    std::fs::write(&bvh, tiny_bvh()).expect("write");
+    let bvh = bvh.to_str().unwrap();
+    let auto_row = |args: &[&str]| {
+        let mut all = vec!["bench", bvh, "--max-error", "20mm"];
+        all.extend_from_slice(args);
+        let o = mocap(&all);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let out = text(&o.stdout);
+        let row = out
+            .lines()
+            .find(|l| l.starts_with("| bench-auto | tiny.bvh | auto ("))
+            .unwrap_or_else(|| panic!("{out}"))
+            .to_string();
+        // folder, file, codec (chosen), bound, frames×ch, bytes.
+        row.split(" | ").take(6).collect::<Vec<_>>().join(" | ")
+    };
+    let alone = auto_row(&["--codec", "auto"]);
+    let derived = auto_row(&[
+        "--codec",
+        "index",
+        "--codec",
+        "pca-spline",
+        "--codec",
+        "predictive",
+        "--codec",
+        "auto",
+    ]);
+    assert_eq!(alone, derived);
+}

@@ -208,13 +208,22 @@ pub fn read_motion_with(path: &Path, opts: &InputOptions) -> Result<Input, Input
 /// Expands folders into their motion files (`.bvh` and `.amc`, sorted);
 /// files pass through.
 pub fn expand(paths: &[PathBuf]) -> std::io::Result<Vec<PathBuf>> {
+    expand_where(paths, is_motion_file)
+}
+
+/// Expands folders into their files that `keep` accepts (sorted); files
+/// pass through.
+pub fn expand_where(
+    paths: &[PathBuf],
+    keep: impl Fn(&Path) -> bool,
+) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     for p in paths {
         if p.is_dir() {
             let mut files: Vec<PathBuf> = std::fs::read_dir(p)
                 .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display())))?
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|f| is_motion_file(f))
+                .filter(|f| keep(f))
                 .collect();
             files.sort();
             out.extend(files);

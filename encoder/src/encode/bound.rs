@@ -5,7 +5,6 @@
 use std::fmt;
 use std::str::FromStr;
 
-use super::EncodeOptions;
 use crate::fixed::{FixedChannels, MDEG_PER_DEG};
 use crate::metrics::Metrics;
 
@@ -160,7 +159,7 @@ impl fmt::Display for Bound {
 /// `s_um` (µm; `None` = no position bound).
 pub(super) fn tolerances(
     fixed: &FixedChannels,
-    opts: &EncodeOptions,
+    bound: &Bound,
     levers_um: &[f64],
     joint_of: &[usize],
     s_um: Option<f64>,
@@ -173,7 +172,7 @@ pub(super) fn tolerances(
         .map(|(c, kind)| {
             let mut tol = f64::INFINITY;
             if kind.is_rotation() {
-                if let Some(d) = opts.bound.angle_deg {
+                if let Some(d) = bound.angle_deg {
                     // Half a millidegree is lost to rounding the input.
                     tol = tol.min(d * MDEG_PER_DEG - 1.0);
                 }

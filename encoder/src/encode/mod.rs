@@ -5,17 +5,18 @@
 
 mod bound;
 mod proof;
+mod reference;
 mod search;
 
 pub use crate::codec::CodecChoice;
 pub use bound::{Bound, BoundError, BoundSpec};
+pub use reference::Reference;
+pub use search::{search_tolerances, Trial};
 
 use crate::codec::CodecError;
-use crate::fixed;
-use crate::kinematics;
-use crate::metrics::{self, Metrics};
+use crate::metrics::Metrics;
 use crate::motion::Motion;
-use search::{encode_by_tolerance, encode_pca, Prepared};
+use search::{encode_by_tolerance, encode_pca};
 
 /// Options of one encode.
 #[derive(Clone, Debug)]
@@ -128,15 +129,7 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, EncodeError> 
     if m.channels() > usize::from(u16::MAX) {
         return Err(EncodeError::TooManyChannels(m.channels()));
     }
-    let input = Prepared {
-        fixed: fixed::to_fixed(m, opts.metres_per_unit),
-        original_mm: metrics::positions_mm(m, opts.metres_per_unit),
-        levers_um: kinematics::lever_arms(&m.skeleton)
-            .into_iter()
-            .map(|l| l * opts.metres_per_unit * 1e6)
-            .collect(),
-        joint_of: m.skeleton.channel_joints(),
-    };
+    let input = Reference::new(m, opts.metres_per_unit);
     let with = |codec| {
         let one = EncodeOptions {
             codec,
@@ -150,15 +143,26 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, EncodeError> 
     if opts.codec != CodecChoice::Auto {
         return with(opts.codec);
     }
-    // Every codec; the smallest clip that meets the bound.
+    smallest(AUTO_CODECS.iter().map(|&codec| (codec, with(codec))))
+}
+
+/// The codecs `auto` encodes with, in this order.
+pub const AUTO_CODECS: [CodecChoice; 3] = [
+    CodecChoice::Index,
+    CodecChoice::PcaSpline,
+    CodecChoice::Predictive,
+];
+
+/// `auto`'s choice among the codecs' results (in [`AUTO_CODECS`] order): the
+/// smallest clip that meets the bound, the first of equal sizes; every
+/// codec's error when none does.
+pub fn smallest(
+    results: impl IntoIterator<Item = (CodecChoice, Result<Encoded, EncodeError>)>,
+) -> Result<Encoded, EncodeError> {
     let mut errors = Vec::new();
     let mut best: Option<Encoded> = None;
-    for codec in [
-        CodecChoice::Index,
-        CodecChoice::PcaSpline,
-        CodecChoice::Predictive,
-    ] {
-        match with(codec) {
+    for (codec, result) in results {
+        match result {
             Ok(e) if best.as_ref().is_none_or(|b| e.bytes.len() < b.bytes.len()) => best = Some(e),
             Ok(_) => {}
             Err(e) => errors.push((codec, e)),

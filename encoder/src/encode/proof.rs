@@ -3,11 +3,13 @@
 
 use mocap_decoder::{consts, Clip};
 
+use super::reference::Reference;
+use super::search::Trial;
 use super::{EncodeError, EncodeOptions};
 use crate::clipfile;
 use crate::container::{assemble, HeaderWire};
-use crate::fixed::{self, FixedChannels};
-use crate::metrics::{self, Metrics};
+use crate::fixed::FixedChannels;
+use crate::metrics::Metrics;
 use crate::motion::Motion;
 
 /// The result of one attempt at fixed tolerances.
@@ -25,12 +27,12 @@ pub(super) struct Attempt {
 /// bit for bit when given.
 pub(super) fn prove(
     m: &Motion,
-    fixed: &FixedChannels,
+    input: &Reference,
     section: (u8, Vec<u8>),
     expected: Option<&FixedChannels>,
     opts: &EncodeOptions,
-    original_mm: &[[f64; 3]],
 ) -> Result<Attempt, EncodeError> {
+    let fixed = &input.fixed;
     let build = |ranges: &FixedChannels| {
         let header = HeaderWire::new(m, opts.metres_per_unit, ranges);
         assemble(&[
@@ -63,21 +65,23 @@ pub(super) fn prove(
     } else {
         build(&decoded)
     };
-    let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, opts.metres_per_unit);
-    let metrics = metrics::compare(
-        m,
-        &back,
-        opts.metres_per_unit,
-        Some(original_mm),
-        bytes.len(),
-        0,
-    );
+    let metrics = input.measure(m, &frames, bytes.len());
     Ok(Attempt {
         bytes,
         metrics,
         key_interval: 0,
         decoded: decoded.values,
     })
+}
+
+impl Trial for Attempt {
+    fn size(&self) -> usize {
+        self.bytes.len()
+    }
+
+    fn metrics(&self) -> &Metrics {
+        &self.metrics
+    }
 }
 
 fn first_difference(a: &[Vec<i32>], b: &[Vec<i32>]) -> Option<(usize, usize)> {

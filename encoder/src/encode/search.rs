@@ -5,32 +5,29 @@
 
 use mocap_decoder::consts;
 
-use super::bound::tolerances;
 use super::proof::{prove, Attempt};
+use super::reference::Reference;
 use super::{Bound, CodecChoice, EncodeError, EncodeOptions, Encoded};
 use crate::codec::{index, pca_spline, predictive};
 use crate::fixed::FixedChannels;
+use crate::metrics::Metrics;
 use crate::motion::Motion;
 
-/// What every codec's search starts from, computed once per encode.
-pub(super) struct Prepared {
-    /// The motion in fixed point.
-    pub fixed: FixedChannels,
-    /// Joint positions of the input, mm (`[joint][xyz]` per frame).
-    pub original_mm: Vec<[f64; 3]>,
-    /// Lever arm of each joint, µm.
-    pub levers_um: Vec<f64>,
-    /// Joint of each channel.
-    pub joint_of: Vec<usize>,
+/// One try of a search: what it made and how its decoded motion measured.
+pub trait Trial {
+    /// Its size in bytes (the search keeps the smallest that holds).
+    fn size(&self) -> usize;
+    /// Its metrics, measured on its decoded motion ([`Reference::measure`]).
+    fn metrics(&self) -> &Metrics;
 }
 
 fn attempt(
     m: &Motion,
-    fixed: &FixedChannels,
+    input: &Reference,
     tol: &[i64],
     opts: &EncodeOptions,
-    original_mm: &[[f64; 3]],
 ) -> Result<Attempt, EncodeError> {
+    let fixed = &input.fixed;
     if opts.codec == CodecChoice::Predictive {
         let block = match opts.key_interval {
             Some(k) => u32::from(k.max(1)),
@@ -43,11 +40,10 @@ fn attempt(
         };
         let mut a = prove(
             m,
-            fixed,
+            input,
             (consts::SECTION_CODEC_PREDICTIVE, enc.section),
             Some(&expected),
             opts,
-            original_mm,
         )?;
         a.key_interval = block.min(u32::from(u16::MAX)) as u16;
         return Ok(a);
@@ -68,11 +64,10 @@ fn attempt(
     };
     let mut a = prove(
         m,
-        fixed,
+        input,
         (consts::SECTION_CODEC_INDEX, enc.to_section()?),
         Some(&expected),
         opts,
-        original_mm,
     )?;
     a.key_interval = enc.key_interval;
     Ok(a)
@@ -83,22 +78,22 @@ fn attempt(
 /// rounds, stopping once `hi / lo < ratio`. Returns the smallest holding
 /// attempt seen (if any), the largest holding parameter found (`lo`) and
 /// the attempts made.
-fn bisect(
+fn bisect<T: Trial, E>(
     bound: &Bound,
     (mut lo, mut hi): (f64, f64),
     steps: usize,
     ratio: f64,
-    mut run: impl FnMut(f64) -> Result<Attempt, EncodeError>,
-) -> Result<(Option<Attempt>, f64, usize), EncodeError> {
-    let mut best: Option<Attempt> = None;
+    mut run: impl FnMut(f64) -> Result<T, E>,
+) -> Result<(Option<T>, f64, usize), E> {
+    let mut best: Option<T> = None;
     let mut attempts = 0;
     for _ in 0..steps {
         attempts += 1;
         let x = (lo * hi).sqrt();
         let a = run(x)?;
-        if bound.holds(&a.metrics) {
+        if bound.holds(a.metrics()) {
             lo = x;
-            if best.as_ref().is_none_or(|b| a.bytes.len() <= b.bytes.len()) {
+            if best.as_ref().is_none_or(|b| a.size() <= b.size()) {
                 best = Some(a);
             }
         } else {
@@ -115,15 +110,15 @@ fn bisect(
 /// for the smallest clip whose decoded output meets the bound.
 pub(super) fn encode_pca(
     m: &Motion,
-    input: &Prepared,
+    reference: &Reference,
     opts: &EncodeOptions,
 ) -> Result<Encoded, EncodeError> {
-    let Prepared {
+    let Reference {
         fixed,
-        original_mm,
         levers_um,
         joint_of,
-    } = input;
+        ..
+    } = reference;
     let mm = opts.bound.positional();
     let weights = pca_spline::pca_weights(
         m,
@@ -155,11 +150,10 @@ pub(super) fn encode_pca(
             let section = model.to_section(fixed.kinds.len());
             prove(
                 m,
-                fixed,
+                reference,
                 (consts::SECTION_CODEC_PCA_SPLINE, section),
                 None,
                 opts,
-                original_mm,
             )
         };
         let first = try_model(&model)?;
@@ -208,45 +202,60 @@ pub(super) fn encode_pca(
 }
 
 /// Encodes with a codec driven by per-channel tolerances (`index`,
-/// `predictive`): tightens an angle bound, or bisects the position budget
-/// of a millimetre bound, until the decoded clip meets the bound.
+/// `predictive`): [`search_tolerances`] with an attempt of that codec.
 pub(super) fn encode_by_tolerance(
     m: &Motion,
-    input: &Prepared,
+    input: &Reference,
     opts: &EncodeOptions,
 ) -> Result<Encoded, EncodeError> {
-    let Prepared {
-        fixed,
-        original_mm,
-        levers_um,
-        joint_of,
-    } = input;
+    let (best, attempts) =
+        search_tolerances(input, &opts.bound, |tol| attempt(m, input, tol, opts))?;
+    Ok(Encoded {
+        bytes: best.bytes,
+        metrics: best.metrics,
+        codec: opts.codec,
+        key_interval: best.key_interval,
+        attempts,
+    })
+}
+
+/// The search of every coder driven by per-channel tolerances: `run` codes
+/// the motion at the tolerances it is given (from
+/// [`Reference::tolerances`]) and measures its decoded motion. Under an
+/// angle bound (no millimetre bound) the tolerances are tightened by 0.8
+/// until the bound holds (at most 8 tries); under a millimetre bound the
+/// position budget per channel is log-bisected (errors of every joint up
+/// the chain add up, so the budget per channel is a fraction of the bound)
+/// and the smallest try that holds is kept. Returns it and the tries made;
+/// [`EncodeError::BoundNotMetAfter`] or [`EncodeError::BoundNotMet`] when
+/// none holds.
+pub fn search_tolerances<T: Trial, E: From<EncodeError>>(
+    input: &Reference,
+    bound: &Bound,
+    mut run: impl FnMut(&[i64]) -> Result<T, E>,
+) -> Result<(T, usize), E> {
     let mut attempts = 0;
     let mut tighten = 1.0;
-    let run = |s_um: Option<f64>, tighten: f64| {
-        let tol = tolerances(fixed, opts, levers_um, joint_of, s_um, tighten);
-        attempt(m, fixed, &tol, opts, original_mm)
-    };
-    let best = match opts.bound.position_mm {
+    let mut run = |s_um: Option<f64>, tighten: f64| run(&input.tolerances(bound, s_um, tighten));
+    let best = match bound.position_mm {
         None => loop {
             attempts += 1;
             let a = run(None, tighten)?;
-            if opts.bound.holds(&a.metrics) {
+            if bound.holds(a.metrics()) {
                 break a;
             }
             if attempts >= 8 {
                 return Err(EncodeError::BoundNotMetAfter {
-                    bound: opts.bound,
+                    bound: *bound,
                     attempts,
-                });
+                }
+                .into());
             }
             tighten *= 0.8;
         },
         Some(p) => {
-            // Bisect the position budget: errors of every joint up the chain
-            // add up, so the budget per channel is a fraction of the bound.
             let bound_um = p * 1000.0;
-            let (best, lo, n) = bisect(&opts.bound, (bound_um * 1e-3, bound_um), 14, 1.03, |s| {
+            let (best, lo, n) = bisect(bound, (bound_um * 1e-3, bound_um), 14, 1.03, |s| {
                 run(Some(s), 1.0)
             })?;
             attempts += n;
@@ -255,19 +264,13 @@ pub(super) fn encode_by_tolerance(
                 None => {
                     attempts += 1;
                     let a = run(Some(lo), 1.0)?;
-                    if !opts.bound.holds(&a.metrics) {
-                        return Err(EncodeError::BoundNotMet { bound: opts.bound });
+                    if !bound.holds(a.metrics()) {
+                        return Err(EncodeError::BoundNotMet { bound: *bound }.into());
                     }
                     a
                 }
             }
         }
     };
-    Ok(Encoded {
-        bytes: best.bytes,
-        metrics: best.metrics,
-        codec: opts.codec,
-        key_interval: best.key_interval,
-        attempts,
-    })
+    Ok((best, attempts))
 }

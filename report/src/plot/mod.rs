@@ -182,20 +182,52 @@ fn draw_frame_errors<DB: DrawingBackend>(
     Ok(())
 }
 
-/// `mocap bench --plot`: compression ratio (vs 32-bit floats) against ARMS,
-/// one colour per codec and bound, one point per file, and a grey line per
-/// file joining its bounds.
+/// `mocap bench --plot`: on the left the rate–distortion plot — ratio vs
+/// 32-bit floats (with header) against ARMS, one point per file, colour =
+/// codec or baseline, marker = bound; on the right the aggregate ratio of
+/// every method at every bound as bars (all files of the run pooled: total
+/// f32 bytes over total bytes with header).
 pub fn rate_distortion_plot(path: &Path, rows: &[Row]) -> Result<(), PlotError> {
     with_backend(
         path,
-        (1000, 700),
-        |a| draw_rd(a, rows),
-        |a| draw_rd(a, rows),
+        (1600, 720),
+        |a| draw_bench(a, rows),
+        |a| draw_bench(a, rows),
     )
 }
 
-fn draw_rd<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, rows: &[Row]) -> DrawResult<(), DB> {
+/// The distinct values of `key` over `rows`, in the order they first appear.
+fn first_seen(rows: &[Row], key: fn(&Row) -> &str) -> Vec<&str> {
+    let mut out: Vec<&str> = Vec::new();
+    for r in rows {
+        let k = key(r);
+        if !out.contains(&k) {
+            out.push(k);
+        }
+    }
+    out
+}
+
+fn draw_bench<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    rows: &[Row],
+) -> DrawResult<(), DB> {
     root.fill(&WHITE)?;
+    let (left, right) = root.split_horizontally(860);
+    let methods = first_seen(rows, |r| r.codec.as_str());
+    let bounds = first_seen(rows, |r| r.bound.as_str());
+    draw_rd(&left, rows, &methods, &bounds)?;
+    draw_bars(&right, rows, &methods, &bounds)?;
+    root.present()?;
+    Ok(())
+}
+
+fn draw_rd<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    rows: &[Row],
+    methods: &[&str],
+    bounds: &[&str],
+) -> DrawResult<(), DB> {
     let xmax = rows
         .iter()
         .map(|r| r.metrics.arms_mm)
@@ -207,11 +239,11 @@ fn draw_rd<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, rows: &[Row]) -> Dr
         .map(|r| r.metrics.ratio_f32)
         .fold(0.0, f64::max)
         .max(1.0)
-        * 1.1;
-    let mut chart = ChartBuilder::on(&root)
+        * 1.4; // room for the legend above the points
+    let mut chart = ChartBuilder::on(area)
         .margin(15)
         .caption(
-            "rate–distortion: ratio vs 32-bit floats against ARMS",
+            "rate–distortion: ratio vs 32-bit floats (with header) against ARMS",
             ("sans-serif", 18),
         )
         .x_label_area_size(40)
@@ -220,52 +252,117 @@ fn draw_rd<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, rows: &[Row]) -> Dr
     chart
         .configure_mesh()
         .x_desc("ARMS (mm)")
-        .y_desc("compression ratio (f32 / clip bytes)")
+        .y_desc("compression ratio (f32 / bytes)")
         .label_style(("sans-serif", 15))
         .draw()?;
-    // One grey line per file through its bounds (sorted by ARMS).
-    let mut files: Vec<(&str, &str)> = rows
-        .iter()
-        .map(|r| (r.group.as_str(), r.file.as_str()))
-        .collect();
-    files.sort();
-    files.dedup();
-    for (g, f) in &files {
-        let mut pts: Vec<(f64, f64)> = rows
-            .iter()
-            .filter(|r| r.group == *g && r.file == *f)
-            .map(|r| (r.metrics.arms_mm, r.metrics.ratio_f32))
-            .collect();
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        chart.draw_series(std::iter::once(PathElement::new(
-            pts,
-            RGBColor(190, 190, 190).stroke_width(1),
-        )))?;
-    }
-    // One series per codec and bound (the index codec is the only one today).
-    let mut bounds: Vec<&str> = Vec::new();
-    for r in rows {
-        if !bounds.contains(&r.bound.as_str()) {
-            bounds.push(&r.bound);
-        }
-    }
-    for (i, b) in bounds.iter().enumerate() {
+    // Colour = method, marker = bound: circle, triangle, square, cross.
+    for (i, m) in methods.iter().enumerate() {
         let colour = PALETTE[i % PALETTE.len()];
+        for (k, b) in bounds.iter().enumerate() {
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.codec == *m && r.bound == *b)
+                .map(|r| (r.metrics.arms_mm, r.metrics.ratio_f32))
+                .collect();
+            let fill = colour.filled();
+            match k % 4 {
+                0 => chart.draw_series(pts.iter().map(|&p| Circle::new(p, 5, fill)))?,
+                1 => chart.draw_series(pts.iter().map(|&p| TriangleMarker::new(p, 6, fill)))?,
+                2 => chart
+                    .draw_series(pts.iter().map(|&p| {
+                        EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], fill)
+                    }))?,
+                _ => chart.draw_series(
+                    pts.iter()
+                        .map(|&p| Cross::new(p, 5, colour.stroke_width(2))),
+                )?,
+            };
+        }
         chart
-            .draw_series(rows.iter().filter(|r| r.bound == *b).map(|r| {
-                Circle::new((r.metrics.arms_mm, r.metrics.ratio_f32), 4, colour.filled())
-            }))?
-            .label(format!("index @ {b}"))
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+            .label(*m)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour.filled()));
+    }
+    for (k, b) in bounds.iter().enumerate() {
+        let anno = chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+            .label(format!("@ {b}"));
+        let ink = BLACK.filled();
+        match k % 4 {
+            0 => anno.legend(move |(x, y)| Circle::new((x + 7, y), 5, ink)),
+            1 => anno.legend(move |(x, y)| TriangleMarker::new((x + 7, y), 6, ink)),
+            2 => anno.legend(move |(x, y)| Rectangle::new([(x + 3, y - 4), (x + 11, y + 4)], ink)),
+            _ => anno.legend(move |(x, y)| Cross::new((x + 7, y), 5, BLACK.stroke_width(2))),
+        };
     }
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .label_font(("sans-serif", 16))
-        .position(SeriesLabelPosition::LowerRight)
+        .label_font(("sans-serif", 15))
+        .position(SeriesLabelPosition::UpperRight)
         .draw()?;
-    root.present()?;
+    Ok(())
+}
+
+fn draw_bars<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    rows: &[Row],
+    methods: &[&str],
+    bounds: &[&str],
+) -> DrawResult<(), DB> {
+    // Aggregate ratio (with header) of each bound and method.
+    let ratio = |b: &str, m: &str| {
+        let sel = rows.iter().filter(|r| r.bound == b && r.codec == m);
+        let (f32b, bytes) = sel.fold((0usize, 0usize), |(f, c), r| {
+            (f + r.f32_bytes, c + r.metrics.bytes)
+        });
+        (bytes > 0).then(|| f32b as f64 / bytes as f64)
+    };
+    let ymax = bounds
+        .iter()
+        .flat_map(|b| methods.iter().filter_map(move |m| ratio(b, m)))
+        .fold(1.0, f64::max)
+        * 1.15;
+    let groups = bounds.len().max(1) as f64;
+    let mut chart = ChartBuilder::on(area)
+        .margin(15)
+        .caption(
+            "aggregate ratio vs f32 (with header), all files",
+            ("sans-serif", 18),
+        )
+        .x_label_area_size(10)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..groups, 0.0..ymax)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_desc("compression ratio")
+        .label_style(("sans-serif", 15))
+        .draw()?;
+    let width = 0.8 / methods.len().max(1) as f64;
+    for (g, b) in bounds.iter().enumerate() {
+        chart.draw_series(std::iter::once(Text::new(
+            format!("@ {b}"),
+            (g as f64 + 0.1, ymax * 0.97),
+            ("sans-serif", 16),
+        )))?;
+        for (i, m) in methods.iter().enumerate() {
+            let Some(v) = ratio(b, m) else { continue };
+            let x0 = g as f64 + 0.1 + i as f64 * width;
+            let colour = PALETTE[i % PALETTE.len()];
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(x0, 0.0), (x0 + width * 0.9, v)],
+                colour.filled(),
+            )))?;
+            chart.draw_series(std::iter::once(Text::new(
+                format!("{v:.1}"),
+                (x0, v + ymax * 0.01),
+                ("sans-serif", 12),
+            )))?;
+        }
+    }
     Ok(())
 }
 

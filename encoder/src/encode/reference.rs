@@ -1,0 +1,83 @@
+//! The input of an encode, measured once ([`Reference`]), and the one
+//! measurement of a decoded motion against it: the proof of every codec's
+//! clip and `mocap bench`'s baselines go through [`Reference::measure`] and
+//! take their per-channel tolerances from [`Reference::tolerances`].
+
+use super::bound::{self, Bound};
+use crate::fixed::{self, FixedChannels};
+use crate::kinematics;
+use crate::metrics::{self, Metrics};
+use crate::motion::Motion;
+
+/// What every search starts from and every measurement compares with,
+/// computed once per motion and unit.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    /// The motion in fixed point (SPEC.md §3.3).
+    pub(super) fixed: FixedChannels,
+    /// Joint positions of the input, mm (`[joint][xyz]` per frame).
+    pub(super) original_mm: Vec<[f64; 3]>,
+    /// Lever arm of each joint, µm.
+    pub(super) levers_um: Vec<f64>,
+    /// Joint of each channel.
+    pub(super) joint_of: Vec<usize>,
+    /// Metres per source length unit.
+    pub(super) metres_per_unit: f64,
+}
+
+impl Reference {
+    /// Measures `m` once: its fixed-point channels, joint positions and
+    /// lever arms, with `metres_per_unit` metres per source length unit.
+    pub fn new(m: &Motion, metres_per_unit: f64) -> Reference {
+        Reference {
+            fixed: fixed::to_fixed(m, metres_per_unit),
+            original_mm: metrics::positions_mm(m, metres_per_unit),
+            levers_um: kinematics::lever_arms(&m.skeleton)
+                .into_iter()
+                .map(|l| l * metres_per_unit * 1e6)
+                .collect(),
+            joint_of: m.skeleton.channel_joints(),
+            metres_per_unit,
+        }
+    }
+
+    /// The motion in fixed point: what the codecs code, `[channel][frame]`.
+    pub fn fixed(&self) -> &FixedChannels {
+        &self.fixed
+    }
+
+    /// Metres per source length unit.
+    pub fn metres_per_unit(&self) -> f64 {
+        self.metres_per_unit
+    }
+
+    /// Per-channel tolerances (fixed-point units) of `bound` for a position
+    /// budget `s_um` (µm; `None` = no position bound), scaled by `tighten`:
+    /// the tolerances the encode pipeline gives its own codecs.
+    pub fn tolerances(&self, bound: &Bound, s_um: Option<f64>, tighten: f64) -> Vec<i64> {
+        bound::tolerances(
+            &self.fixed,
+            bound,
+            &self.levers_um,
+            &self.joint_of,
+            s_um,
+            tighten,
+        )
+    }
+
+    /// Measures decoded frames (frame-major `frames × channels` fixed-point
+    /// values, as the decoder gives them) against `m`, the motion this
+    /// reference was made from: the metrics a bound is checked on. `bytes`
+    /// is the size the ratios are computed with.
+    pub fn measure(&self, m: &Motion, frames: &[i32], bytes: usize) -> Metrics {
+        let back = fixed::from_fixed(&m.skeleton, m.frame_time, frames, self.metres_per_unit);
+        metrics::compare(
+            m,
+            &back,
+            self.metres_per_unit,
+            Some(&self.original_mm),
+            bytes,
+            0,
+        )
+    }
+}
