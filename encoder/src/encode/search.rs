@@ -148,9 +148,10 @@ pub(super) fn encode_pca(
         (None, None) => Bound::DEFAULT_TRANSLATION_MM,
     };
     let fps = 1.0 / m.frame_time;
+    let cache = pca_spline::Cache::default();
     let run = |tau: f64| -> Result<Attempt, EncodeError> {
         let params = pca_spline::Params::new(tau, fps);
-        let mut model = pca_spline::model(&input, &params)?;
+        let mut model = pca_spline::model_with(&input, &params, &cache)?;
         let try_model = |model: &pca_spline::Model| {
             let section = model.to_section(fixed.kinds.len());
             prove(

@@ -117,6 +117,80 @@ fn worst(data: &[f64], k: usize, times: &[u32], error: &impl Fn(&[f64]) -> f64) 
     (w, controls)
 }
 
+/// Each frame's control rows and weights at `times` ([`row`]).
+fn rows_of(times: &[u32], len: usize) -> Vec<([usize; 4], [f64; 4])> {
+    (0..len).map(|f| row(times, f as u32)).collect()
+}
+
+/// The rows and weights at `times` without key `r`, from those at `times`
+/// (`rw`): a frame whose four keys do not include `r` keeps its weights
+/// (the same four key times), its rows past `r` one lower; the others are
+/// computed anew.
+fn rows_without(
+    rw: &[([usize; 4], [f64; 4])],
+    fewer: &[u32],
+    r: usize,
+    into: &mut Vec<([usize; 4], [f64; 4])>,
+) {
+    into.clear();
+    into.extend(rw.iter().enumerate().map(|(f, &(rows, w))| {
+        if rows.contains(&r) {
+            row(fewer, f as u32)
+        } else {
+            (rows.map(|q| if q > r { q - 1 } else { q }), w)
+        }
+    }));
+}
+
+/// [`fit`] from each frame's rows and weights (the same sums in the same
+/// order, so the same controls).
+fn fit_rows(rw: &[([usize; 4], [f64; 4])], m: usize, data: &[f64], k: usize) -> Vec<f64> {
+    let mut band = Band::new(m);
+    let mut rhs = vec![0.0; m * k];
+    for (f, (rows, w)) in rw.iter().enumerate() {
+        for a in 0..4 {
+            for b in 0..4 {
+                band.add(rows[a], rows[b], w[a] * w[b]);
+            }
+            for j in 0..k {
+                rhs[rows[a] * k + j] += w[a] * data[f * k + j];
+            }
+        }
+    }
+    band.solve(&mut rhs, k);
+    rhs
+}
+
+/// The controls of the fit at the keys `rw` stands for, if no frame's
+/// error exceeds `limit` ([`worst`]'s figures, with frames between
+/// `near.0` and `near.1` looked at first: where a dropped key shows).
+fn fit_within(
+    data: &[f64],
+    k: usize,
+    rw: &[([usize; 4], [f64; 4])],
+    m: usize,
+    near: (usize, usize),
+    limit: f64,
+    error: &impl Fn(&[f64]) -> f64,
+) -> Option<Vec<f64>> {
+    let len = rw.len();
+    let controls = fit_rows(rw, m, data, k);
+    let mut delta = vec![0.0; k];
+    let (lo, hi) = (near.0.min(len), near.1.min(len));
+    for f in (lo..hi).chain(0..lo).chain(hi..len) {
+        let (rows, w) = &rw[f];
+        for j in 0..k {
+            // `evaluate`'s sum, term for term.
+            let fitted: f64 = (0..4).map(|a| w[a] * controls[rows[a] * k + j]).sum();
+            delta[j] = data[f * k + j] - fitted;
+        }
+        if error(&delta) > limit {
+            return None;
+        }
+    }
+    Some(controls)
+}
+
 /// Midpoint insertion overshoots: drop every key whose removal keeps the
 /// worst error within `max(tol, the current worst)`.
 fn prune(
@@ -127,18 +201,27 @@ fn prune(
     mut times: Vec<u32>,
     mut controls: Vec<f64>,
 ) -> (Vec<u32>, Vec<f64>) {
+    let len = data.len() / k;
     let (now, _) = worst(data, k, &times, error);
     let limit = tol.max(now);
+    let mut rw = rows_of(&times, len);
+    let mut trial = Vec::with_capacity(len);
     let mut i = 1;
     while i + 1 < times.len() {
         let mut fewer = times.clone();
         fewer.remove(i);
-        let (w, c) = worst(data, k, &fewer, error);
-        if w <= limit {
-            times = fewer;
-            controls = c;
-        } else {
-            i += 1;
+        rows_without(&rw, &fewer, i, &mut trial);
+        let near = (
+            times[i.saturating_sub(2)] as usize,
+            times[(i + 2).min(times.len() - 1)] as usize + 1,
+        );
+        match fit_within(data, k, &trial, fewer.len(), near, limit, error) {
+            Some(c) => {
+                times = fewer;
+                controls = c;
+                std::mem::swap(&mut rw, &mut trial);
+            }
+            None => i += 1,
         }
     }
     (times, controls)
