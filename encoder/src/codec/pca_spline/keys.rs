@@ -117,114 +117,305 @@ fn worst(data: &[f64], k: usize, times: &[u32], error: &impl Fn(&[f64]) -> f64) 
     (w, controls)
 }
 
-/// Each frame's control rows and weights at `times` ([`row`]).
-fn rows_of(times: &[u32], len: usize) -> Vec<([usize; 4], [f64; 4])> {
-    (0..len).map(|f| row(times, f as u32)).collect()
-}
-
-/// The rows and weights at `times` without key `r`, from those at `times`
-/// (`rw`): a frame whose four keys do not include `r` keeps its weights
-/// (the same four key times), its rows past `r` one lower; the others are
-/// computed anew.
-fn rows_without(
-    rw: &[([usize; 4], [f64; 4])],
-    fewer: &[u32],
-    r: usize,
-    into: &mut Vec<([usize; 4], [f64; 4])>,
-) {
-    into.clear();
-    into.extend(rw.iter().enumerate().map(|(f, &(rows, w))| {
-        if rows.contains(&r) {
-            row(fewer, f as u32)
-        } else {
-            (rows.map(|q| if q > r { q - 1 } else { q }), w)
-        }
-    }));
-}
-
-/// [`fit`] from each frame's rows and weights (the same sums in the same
-/// order, so the same controls).
-fn fit_rows(rw: &[([usize; 4], [f64; 4])], m: usize, data: &[f64], k: usize) -> Vec<f64> {
-    let mut band = Band::new(m);
-    let mut rhs = vec![0.0; m * k];
-    for (f, (rows, w)) in rw.iter().enumerate() {
-        for a in 0..4 {
-            for b in 0..4 {
-                band.add(rows[a], rows[b], w[a] * w[b]);
-            }
-            for j in 0..k {
-                rhs[rows[a] * k + j] += w[a] * data[f * k + j];
-            }
-        }
-    }
-    band.solve(&mut rhs, k);
-    rhs
-}
-
-/// The controls of the fit at the keys `rw` stands for, if no frame's
-/// error exceeds `limit` ([`worst`]'s figures, with frames between
-/// `near.0` and `near.1` looked at first: where a dropped key shows).
-fn fit_within(
-    data: &[f64],
-    k: usize,
-    rw: &[([usize; 4], [f64; 4])],
-    m: usize,
-    near: (usize, usize),
-    limit: f64,
-    error: &impl Fn(&[f64]) -> f64,
-) -> Option<Vec<f64>> {
-    let len = rw.len();
-    let controls = fit_rows(rw, m, data, k);
-    let mut delta = vec![0.0; k];
-    let (lo, hi) = (near.0.min(len), near.1.min(len));
-    for f in (lo..hi).chain(0..lo).chain(hi..len) {
-        let (rows, w) = &rw[f];
-        for j in 0..k {
-            // `evaluate`'s sum, term for term.
-            let fitted: f64 = (0..4).map(|a| w[a] * controls[rows[a] * k + j]).sum();
-            delta[j] = data[f * k + j] - fitted;
-        }
-        if error(&delta) > limit {
-            return None;
-        }
-    }
-    Some(controls)
-}
+/// A frame's four control rows and their weights ([`row`]).
+type Rw = ([usize; 4], [f64; 4]);
 
 /// Midpoint insertion overshoots: drop every key whose removal keeps the
 /// worst error within `max(tol, the current worst)`.
+///
+/// Each key is tried by the least-squares fit of the whole curve without
+/// it, exactly as [`fit`] computes it, but from the fit that holds: a
+/// frame whose four keys do not include the dropped one keeps its weights,
+/// so only the normal equations' rows near the key are summed again (the
+/// same terms in the same order), the Cholesky factor and forward solution
+/// are kept above them, and a candidate is rejected at the first frame over
+/// the limit, looked for near the key first.
 fn prune(
     data: &[f64],
     k: usize,
     tol: f64,
     error: &impl Fn(&[f64]) -> f64,
-    mut times: Vec<u32>,
-    mut controls: Vec<f64>,
+    times: Vec<u32>,
+    controls: Vec<f64>,
 ) -> (Vec<u32>, Vec<f64>) {
-    let len = data.len() / k;
     let (now, _) = worst(data, k, &times, error);
     let limit = tol.max(now);
-    let mut rw = rows_of(&times, len);
-    let mut trial = Vec::with_capacity(len);
+    let mut sys = System::new(data, k, times, controls);
+    let mut trial = Trial::default();
     let mut i = 1;
-    while i + 1 < times.len() {
-        let mut fewer = times.clone();
-        fewer.remove(i);
-        rows_without(&rw, &fewer, i, &mut trial);
-        let near = (
-            times[i.saturating_sub(2)] as usize,
-            times[(i + 2).min(times.len() - 1)] as usize + 1,
-        );
-        match fit_within(data, k, &trial, fewer.len(), near, limit, error) {
-            Some(c) => {
-                times = fewer;
-                controls = c;
-                std::mem::swap(&mut rw, &mut trial);
-            }
-            None => i += 1,
+    while i + 1 < sys.times.len() {
+        trial.without(&sys, data, k, i);
+        if trial.within(&sys, data, k, i, limit, error) {
+            sys.accept(&mut trial, i);
+        } else {
+            i += 1;
         }
     }
-    (times, controls)
+    (sys.times, sys.controls)
+}
+
+/// The fit at the kept keys, with what a trial reuses.
+struct System {
+    times: Vec<u32>,
+    /// Each frame's rows and weights.
+    rw: Vec<Rw>,
+    /// The normal equations as summed (band rows), and their right-hand
+    /// sides (`m × k`).
+    a: Vec<[f64; 4]>,
+    b: Vec<f64>,
+    /// The ridge scale, Cholesky factor and forward solution of `a`, `b`.
+    scale: f64,
+    l: Vec<[f64; 4]>,
+    y: Vec<f64>,
+    controls: Vec<f64>,
+}
+
+impl System {
+    fn new(data: &[f64], k: usize, times: Vec<u32>, controls: Vec<f64>) -> System {
+        let len = data.len() / k;
+        let m = times.len();
+        let rw: Vec<Rw> = (0..len).map(|f| row(&times, f as u32)).collect();
+        let mut band = Band::new(m);
+        let mut b = vec![0.0; m * k];
+        for (f, (rows, w)) in rw.iter().enumerate() {
+            for a in 0..4 {
+                for q in 0..4 {
+                    band.add(rows[a], rows[q], w[a] * w[q]);
+                }
+                for j in 0..k {
+                    b[rows[a] * k + j] += w[a] * data[f * k + j];
+                }
+            }
+        }
+        let a = band.a;
+        let scale = ridge_scale(&a);
+        let mut l = a.clone();
+        factor(&mut l, 0, scale);
+        let mut y = b.clone();
+        forward(&l, &mut y, k, 0);
+        System {
+            times,
+            rw,
+            a,
+            b,
+            scale,
+            l,
+            y,
+            controls,
+        }
+    }
+
+    /// Takes the trial that dropped key `r`.
+    fn accept(&mut self, t: &mut Trial, r: usize) {
+        self.times.remove(r);
+        for (f, rw) in self.rw.iter_mut().enumerate() {
+            if (t.aff.0..t.aff.1).contains(&f) {
+                *rw = t.new_rows[f - t.aff.0];
+            } else {
+                rw.0 = shift(rw.0, r);
+            }
+        }
+        std::mem::swap(&mut self.a, &mut t.a);
+        std::mem::swap(&mut self.b, &mut t.b);
+        std::mem::swap(&mut self.l, &mut t.l);
+        std::mem::swap(&mut self.y, &mut t.y);
+        std::mem::swap(&mut self.controls, &mut t.x);
+        self.scale = t.scale;
+    }
+}
+
+/// Rows past the dropped key `r` move one up.
+fn shift(rows: [usize; 4], r: usize) -> [usize; 4] {
+    rows.map(|q| if q > r { q - 1 } else { q })
+}
+
+/// The fit without one key.
+#[derive(Default)]
+struct Trial {
+    fewer: Vec<u32>,
+    /// Frames whose four keys include the dropped one, and their new rows
+    /// and weights.
+    aff: (usize, usize),
+    new_rows: Vec<Rw>,
+    /// Frames whose rows meet the rows summed again.
+    near: (usize, usize),
+    a: Vec<[f64; 4]>,
+    b: Vec<f64>,
+    scale: f64,
+    l: Vec<[f64; 4]>,
+    y: Vec<f64>,
+    x: Vec<f64>,
+    delta: Vec<f64>,
+}
+
+impl Trial {
+    fn rows(&self, sys: &System, f: usize, r: usize) -> Rw {
+        if (self.aff.0..self.aff.1).contains(&f) {
+            self.new_rows[f - self.aff.0]
+        } else {
+            let (rows, w) = sys.rw[f];
+            (shift(rows, r), w)
+        }
+    }
+
+    /// The fit of `sys` without key `r` (`0 < r < m − 1`).
+    fn without(&mut self, sys: &System, data: &[f64], k: usize, r: usize) {
+        let m = sys.times.len() - 1;
+        let len = sys.rw.len();
+        self.fewer.clear();
+        self.fewer.extend_from_slice(&sys.times[..r]);
+        self.fewer.extend_from_slice(&sys.times[r + 1..]);
+        // Rows are monotone in the frame: the frames that used key r are
+        // one run.
+        let fa = sys.rw.partition_point(|(rows, _)| rows[3] < r);
+        let fb = sys.rw.partition_point(|(rows, _)| rows[0] <= r);
+        self.aff = (fa, fb);
+        self.new_rows.clear();
+        let fewer = &self.fewer;
+        self.new_rows.extend((fa..fb).map(|f| row(fewer, f as u32)));
+        // Band rows r − 3 ..= r + 2 (in the new numbering) are the ones
+        // those frames touch, now or before; every other row sums the same
+        // terms as it did.
+        let (lo, hi) = (r.saturating_sub(3), (r + 2).min(m - 1));
+        self.a.clear();
+        self.a.extend_from_slice(&sys.a[..r]);
+        self.a.extend_from_slice(&sys.a[r + 1..]);
+        self.b.clear();
+        self.b.extend_from_slice(&sys.b[..r * k]);
+        self.b.extend_from_slice(&sys.b[(r + 1) * k..]);
+        for x in lo..=hi {
+            self.a[x] = [0.0; 4];
+            self.b[x * k..(x + 1) * k].fill(0.0);
+        }
+        // Frames of the intervals lo − 2 ..= hi + 1.
+        let f0 = self.fewer[lo.saturating_sub(2)] as usize;
+        let f1 = (self.fewer[(hi + 2).min(m - 1)] as usize + 1).min(len);
+        self.near = (f0, f1);
+        for f in f0..f1 {
+            let (rows, w) = self.rows(sys, f, r);
+            for a in 0..4 {
+                let x = rows[a];
+                if x < lo || x > hi {
+                    continue;
+                }
+                for q in 0..4 {
+                    if rows[q] <= x {
+                        self.a[x][x - rows[q]] += w[a] * w[q];
+                    }
+                }
+                for j in 0..k {
+                    self.b[x * k + j] += w[a] * data[f * k + j];
+                }
+            }
+        }
+        // The factor and forward solution hold above row lo when the ridge
+        // is the same.
+        self.scale = ridge_scale(&self.a);
+        let from = if self.scale.to_bits() == sys.scale.to_bits() {
+            lo
+        } else {
+            0
+        };
+        self.l.clear();
+        self.l.extend_from_slice(&sys.l[..from]);
+        self.l.extend_from_slice(&self.a[from..]);
+        factor(&mut self.l, from, self.scale);
+        self.y.clear();
+        self.y.extend_from_slice(&sys.y[..from * k]);
+        self.y.extend_from_slice(&self.b[from * k..]);
+        forward(&self.l, &mut self.y, k, from);
+        self.x.clone_from(&self.y);
+        backward(&self.l, &mut self.x, k);
+    }
+
+    /// True if no frame's error exceeds `limit` ([`worst`]'s figures).
+    fn within(
+        &mut self,
+        sys: &System,
+        data: &[f64],
+        k: usize,
+        r: usize,
+        limit: f64,
+        error: &impl Fn(&[f64]) -> f64,
+    ) -> bool {
+        let len = sys.rw.len();
+        self.delta.resize(k, 0.0);
+        let (lo, hi) = self.near;
+        for f in (lo..hi).chain(0..lo).chain(hi..len) {
+            let (rows, w) = self.rows(sys, f, r);
+            for j in 0..k {
+                // `evaluate`'s sum, term for term.
+                let fitted: f64 = (0..4).map(|a| w[a] * self.x[rows[a] * k + j]).sum();
+                self.delta[j] = data[f * k + j] - fitted;
+            }
+            if error(&self.delta) > limit {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// The ridge [`Band::solve`] adds: a tiny share of the largest diagonal.
+fn ridge_scale(a: &[[f64; 4]]) -> f64 {
+    a.iter().map(|r| r[0]).fold(0.0f64, f64::max).max(1e-300)
+}
+
+/// Adds the ridge to rows `from..` of `l` (the summed band rows) and
+/// factors them in place, rows above `from` being factored already.
+fn factor(l: &mut [[f64; 4]], from: usize, scale: f64) {
+    let m = l.len();
+    for r in &mut l[from..] {
+        r[0] += scale * 1e-12;
+    }
+    for i in from..m {
+        for d in (0..=3.min(i)).rev() {
+            let j = i - d;
+            let mut s = l[i][d];
+            for e in 1..=3 {
+                // Σ_{q < j} L[i][q] L[j][q], q = j - e.
+                if e > j || d + e > 3 {
+                    continue;
+                }
+                s -= l[i][d + e] * l[j][e];
+            }
+            if d == 0 {
+                l[i][0] = s.max(1e-300).sqrt();
+            } else {
+                l[i][d] = s / l[j][0];
+            }
+        }
+    }
+}
+
+/// `L y = b` for rows `from..` (`y` holds `b` there and `y` above), `k`
+/// right-hand sides.
+fn forward(l: &[[f64; 4]], y: &mut [f64], k: usize, from: usize) {
+    for c in 0..k {
+        for i in from..l.len() {
+            let mut s = y[i * k + c];
+            for d in 1..=3.min(i) {
+                s -= l[i][d] * y[(i - d) * k + c];
+            }
+            y[i * k + c] = s / l[i][0];
+        }
+    }
+}
+
+/// `Lᵀ x = y` in place.
+fn backward(l: &[[f64; 4]], x: &mut [f64], k: usize) {
+    let m = l.len();
+    for c in 0..k {
+        for i in (0..m).rev() {
+            let mut s = x[i * k + c];
+            for d in 1..=3 {
+                if i + d < m {
+                    s -= l[i + d][d] * x[(i + d) * k + c];
+                }
+            }
+            x[i * k + c] = s / l[i][0];
+        }
+    }
 }
 
 /// A symmetric positive-definite matrix with half-bandwidth 3 (the normal
@@ -251,56 +442,12 @@ impl Band {
 
     /// Solves in place for `k` right-hand sides (`rhs` is `m × k`).
     fn solve(mut self, rhs: &mut [f64], k: usize) {
-        let m = self.m;
+        debug_assert_eq!(self.a.len(), self.m);
         // A tiny ridge keeps rows of keys no frame weighs positive.
-        let scale = self
-            .a
-            .iter()
-            .map(|r| r[0])
-            .fold(0.0f64, f64::max)
-            .max(1e-300);
-        for r in &mut self.a {
-            r[0] += scale * 1e-12;
-        }
-        // L in place.
-        for i in 0..m {
-            for d in (0..=3.min(i)).rev() {
-                let j = i - d;
-                let mut s = self.a[i][d];
-                for e in 1..=3 {
-                    // Σ_{q < j} L[i][q] L[j][q], q = j - e.
-                    if e > j || d + e > 3 {
-                        continue;
-                    }
-                    s -= self.a[i][d + e] * self.a[j][e];
-                }
-                if d == 0 {
-                    self.a[i][0] = s.max(1e-300).sqrt();
-                } else {
-                    self.a[i][d] = s / self.a[j][0];
-                }
-            }
-        }
-        for c in 0..k {
-            // L y = b
-            for i in 0..m {
-                let mut s = rhs[i * k + c];
-                for d in 1..=3.min(i) {
-                    s -= self.a[i][d] * rhs[(i - d) * k + c];
-                }
-                rhs[i * k + c] = s / self.a[i][0];
-            }
-            // Lᵀ x = y
-            for i in (0..m).rev() {
-                let mut s = rhs[i * k + c];
-                for d in 1..=3 {
-                    if i + d < m {
-                        s -= self.a[i + d][d] * rhs[(i + d) * k + c];
-                    }
-                }
-                rhs[i * k + c] = s / self.a[i][0];
-            }
-        }
+        let scale = ridge_scale(&self.a);
+        factor(&mut self.a, 0, scale);
+        forward(&self.a, rhs, k, 0);
+        backward(&self.a, rhs, k);
     }
 }
 
