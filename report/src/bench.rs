@@ -69,13 +69,45 @@ fn group_of(p: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// Runs the bench; progress goes to stderr.
+/// Where a bench reports as it runs.
+pub trait Report {
+    /// The progress of encode `at` (from 0) of `total` (one file with one
+    /// codec at one bound, `label`).
+    fn encode(&self, at: usize, total: usize, label: &str) -> Box<dyn encode::Progress + '_>;
+    /// A finished encode's line (`  file codec @ bound: N bytes, ratio R`).
+    fn line(&self, line: &str);
+}
+
+/// [`Report`] on stderr: each encode's line, no progress.
+pub struct Stderr;
+
+impl Report for Stderr {
+    fn encode(&self, _: usize, _: usize, _: &str) -> Box<dyn encode::Progress + '_> {
+        Box::new(encode::Silent)
+    }
+
+    fn line(&self, line: &str) {
+        eprintln!("{line}");
+    }
+}
+
+/// Runs the bench; each encode's line goes to stderr.
 /// `bounds` are `+`-joined specs (`50mm+arms:10mm`), each one column of
 /// the table.
 pub fn run(
     paths: &[PathBuf],
     codecs: &[CodecChoice],
     bounds: &[String],
+) -> Result<Vec<Row>, BenchError> {
+    run_with(paths, codecs, bounds, &Stderr)
+}
+
+/// [`run`], reporting to `report`.
+pub fn run_with(
+    paths: &[PathBuf],
+    codecs: &[CodecChoice],
+    bounds: &[String],
+    report: &dyn Report,
 ) -> Result<Vec<Row>, BenchError> {
     let specs = bounds
         .iter()
@@ -87,6 +119,7 @@ pub fn run(
         })
         .collect::<Result<Vec<_>, _>>()?;
     let files = mocap_encoder::input::expand(paths)?;
+    let total = files.len() * codecs.len() * specs.len();
     let mut rows = Vec::new();
     for file in &files {
         let input = mocap_encoder::input::read_motion(file, None)?;
@@ -106,19 +139,21 @@ pub fn run(
                 key_interval: None,
             };
             let t = Instant::now();
-            let enc = encode::encode(&m, &opts).map_err(|source| BenchError::Encode {
-                file: file.clone(),
-                source,
+            let label = format!("{} {} @ {name}", file.display(), codec.name());
+            let progress = report.encode(rows.len(), total, &label);
+            let enc = encode::encode_with(&m, &opts, progress.as_ref()).map_err(|source| {
+                BenchError::Encode {
+                    file: file.clone(),
+                    source,
+                }
             })?;
             let mut metrics = enc.metrics;
             metrics.ratio_file = file_bytes as f64 / enc.bytes.len() as f64;
-            eprintln!(
-                "  {} {} @ {name}: {} bytes, ratio {:.1}",
-                file.display(),
-                codec.name(),
+            report.line(&format!(
+                "  {label}: {} bytes, ratio {:.1}",
                 enc.bytes.len(),
                 metrics.ratio_f32
-            );
+            ));
             rows.push(Row {
                 group: group_of(file),
                 file: file

@@ -7,6 +7,30 @@ use mocap_encoder::codec::CodecChoice;
 use mocap_report::{bench, plot};
 
 use super::{write, CodecArg};
+use crate::progress::{Bar, Nested};
+
+/// The bench's encodes on one bar, their lines above it.
+struct BarReport(Bar);
+
+impl bench::Report for BarReport {
+    fn encode(
+        &self,
+        at: usize,
+        total: usize,
+        label: &str,
+    ) -> Box<dyn mocap_encoder::encode::Progress + '_> {
+        Box::new(Nested {
+            bar: &self.0,
+            at,
+            units: total,
+            label: label.to_string(),
+        })
+    }
+
+    fn line(&self, line: &str) {
+        self.0.println(line);
+    }
+}
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -29,7 +53,10 @@ pub struct Args {
 
 pub fn run(a: Args) -> super::Result {
     let codecs: Vec<CodecChoice> = a.codec.iter().map(|&c| c.into()).collect();
-    let rows = bench::run(&a.paths, &codecs, &a.max_error)?;
+    let bar = BarReport(Bar::new(1));
+    let rows = bench::run_with(&a.paths, &codecs, &a.max_error, &bar);
+    bar.0.finish();
+    let rows = rows?;
     print!("{}", bench::markdown(&rows));
     if let Some(p) = &a.json {
         write(p, serde_json::to_string_pretty(&rows)?.as_bytes())?;

@@ -57,6 +57,23 @@ impl Mode {
 /// every decoded value within `tol[c]` of the input, in blocks of
 /// `block_frames` frames.
 pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Encoded, CodecError> {
+    encode_with(values, tol, block_frames, &|_, _| {})
+}
+
+/// [`encode`], calling `on_channel(done, total)` as channels are searched
+/// (from the encoding threads; twice per channel: its step, its residuals).
+pub fn encode_with(
+    values: &[Vec<i32>],
+    tol: &[i64],
+    block_frames: u32,
+    on_channel: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Encoded, CodecError> {
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let total = 2 * values.len();
+    let tick = || {
+        let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        on_channel(d, total);
+    };
     let frames = values.first().map_or(0, Vec::len);
     if frames == 0 || values.iter().any(|v| v.len() != frames) || tol.len() != values.len() {
         return Err(CodecError::PredictiveShape);
@@ -90,6 +107,7 @@ pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Enc
         .zip(&tol)
         .zip(&constant)
         .map(|((v, &t), c)| {
+            tick();
             if let Some(k) = c {
                 return Ok((Mode::Constant(*k), Vec::new()));
             }
@@ -128,10 +146,13 @@ pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Enc
         .par_iter()
         .zip(&tol)
         .zip(&modes)
-        .map(|((v, &t), mode)| match *mode {
-            Mode::Constant(_) => Vec::new(),
-            Mode::Predicted { weight, multiplier } => {
-                beam_search(v, t, i64::from(multiplier) * unit, weight, block, &costs)
+        .map(|((v, &t), mode)| {
+            tick();
+            match *mode {
+                Mode::Constant(_) => Vec::new(),
+                Mode::Predicted { weight, multiplier } => {
+                    beam_search(v, t, i64::from(multiplier) * unit, weight, block, &costs)
+                }
             }
         })
         .collect();

@@ -7,7 +7,7 @@ use mocap_decoder::consts;
 
 use super::bound::tolerances;
 use super::proof::{prove, Attempt};
-use super::{Bound, CodecChoice, EncodeError, EncodeOptions, Encoded};
+use super::{Bound, CodecChoice, EncodeError, EncodeOptions, Encoded, Progress};
 use crate::codec::{index, pca_spline, predictive};
 use crate::fixed::FixedChannels;
 use crate::motion::Motion;
@@ -30,13 +30,14 @@ fn attempt(
     tol: &[i64],
     opts: &EncodeOptions,
     original_mm: &[[f64; 3]],
+    progress: &dyn Progress,
 ) -> Result<Attempt, EncodeError> {
     if opts.codec == CodecChoice::Predictive {
         let block = match opts.key_interval {
             Some(k) => u32::from(k.max(1)),
             None => ((predictive::DEFAULT_BLOCK_SECONDS / m.frame_time).round() as u32).max(1),
         };
-        let enc = predictive::encode(&fixed.values, tol, block)?;
+        let enc = predictive::encode_with(&fixed.values, tol, block, &|d, t| progress.work(d, t))?;
         let expected = FixedChannels {
             kinds: fixed.kinds.clone(),
             values: enc.decoded,
@@ -89,11 +90,13 @@ fn bisect(
     steps: usize,
     ratio: f64,
     mut run: impl FnMut(f64) -> Result<Attempt, EncodeError>,
+    mut round: impl FnMut(usize),
 ) -> Result<(Option<Attempt>, f64, usize), EncodeError> {
     let mut best: Option<Attempt> = None;
     let mut attempts = 0;
     for _ in 0..steps {
         attempts += 1;
+        round(attempts);
         let x = (lo * hi).sqrt();
         let a = run(x)?;
         if bound.holds(&a.metrics) {
@@ -111,12 +114,28 @@ fn bisect(
     Ok((best, lo, attempts))
 }
 
+/// How many rounds [`bisect`] makes: the ratio `hi / lo` is square-rooted
+/// each round, whatever the outcome.
+fn bisect_rounds((lo, hi): (f64, f64), steps: usize, ratio: f64) -> usize {
+    let mut r = (hi / lo).ln();
+    let mut n = 0;
+    while n < steps {
+        n += 1;
+        r /= 2.0;
+        if r < ratio.ln() {
+            break;
+        }
+    }
+    n
+}
+
 /// Encodes with `pca-spline`, searching the tolerance `τ` (log-bisection)
 /// for the smallest clip whose decoded output meets the bound.
 pub(super) fn encode_pca(
     m: &Motion,
     input: &Prepared,
     opts: &EncodeOptions,
+    progress: &dyn Progress,
 ) -> Result<Encoded, EncodeError> {
     let Prepared {
         fixed,
@@ -151,7 +170,8 @@ pub(super) fn encode_pca(
     let cache = pca_spline::Cache::default();
     let run = |tau: f64| -> Result<Attempt, EncodeError> {
         let params = pca_spline::Params::new(tau, fps);
-        let mut model = pca_spline::model_with(&input, &params, &cache)?;
+        let mut model =
+            pca_spline::model_with(&input, &params, &cache, &|d, t| progress.work(d, t))?;
         let try_model = |model: &pca_spline::Model| {
             let section = model.to_section(fixed.kinds.len());
             prove(
@@ -171,12 +191,17 @@ pub(super) fn encode_pca(
         }
         try_model(&model)
     };
-    let (mut best, lo, mut attempts) =
-        bisect(&opts.bound, (scale / 256.0, scale * 2.0), 20, 1.02, run)?;
+    let range = (scale / 256.0, scale * 2.0);
+    let rounds = bisect_rounds(range, 20, 1.02) + 6;
+    let codec = CodecChoice::PcaSpline;
+    let (mut best, lo, mut attempts) = bisect(&opts.bound, range, 20, 1.02, run, |n| {
+        progress.round(codec, n, rounds)
+    })?;
     // Size and error are not quite monotonic in τ: probe a little above
     // the boundary too and keep the smallest clip that holds.
     for i in 1..=6 {
         attempts += 1;
+        progress.round(codec, attempts, rounds.max(attempts));
         let a = run(lo * (1.0 + 0.03 * i as f64))?;
         if opts.bound.holds(&a.metrics)
             && best.as_ref().is_none_or(|b| a.bytes.len() < b.bytes.len())
@@ -188,6 +213,7 @@ pub(super) fn encode_pca(
         Some(b) => b,
         None => {
             attempts += 1;
+            progress.round(codec, attempts, attempts);
             let a = run(lo)?;
             if !opts.bound.holds(&a.metrics) {
                 return Err(EncodeError::PcaBoundNotMet {
@@ -215,6 +241,7 @@ pub(super) fn encode_by_tolerance(
     m: &Motion,
     input: &Prepared,
     opts: &EncodeOptions,
+    progress: &dyn Progress,
 ) -> Result<Encoded, EncodeError> {
     let Prepared {
         fixed,
@@ -226,11 +253,12 @@ pub(super) fn encode_by_tolerance(
     let mut tighten = 1.0;
     let run = |s_um: Option<f64>, tighten: f64| {
         let tol = tolerances(fixed, opts, levers_um, joint_of, s_um, tighten);
-        attempt(m, fixed, &tol, opts, original_mm)
+        attempt(m, fixed, &tol, opts, original_mm, progress)
     };
     let best = match opts.bound.position_mm {
         None => loop {
             attempts += 1;
+            progress.round(opts.codec, attempts, attempts);
             let a = run(None, tighten)?;
             if opts.bound.holds(&a.metrics) {
                 break a;
@@ -247,14 +275,22 @@ pub(super) fn encode_by_tolerance(
             // Bisect the position budget: errors of every joint up the chain
             // add up, so the budget per channel is a fraction of the bound.
             let bound_um = p * 1000.0;
-            let (best, lo, n) = bisect(&opts.bound, (bound_um * 1e-3, bound_um), 14, 1.03, |s| {
-                run(Some(s), 1.0)
-            })?;
+            let range = (bound_um * 1e-3, bound_um);
+            let rounds = bisect_rounds(range, 14, 1.03);
+            let (best, lo, n) = bisect(
+                &opts.bound,
+                range,
+                14,
+                1.03,
+                |s| run(Some(s), 1.0),
+                |n| progress.round(opts.codec, n, rounds),
+            )?;
             attempts += n;
             match best {
                 Some(b) => b,
                 None => {
                     attempts += 1;
+                    progress.round(opts.codec, attempts, attempts);
                     let a = run(Some(lo), 1.0)?;
                     if !opts.bound.holds(&a.metrics) {
                         return Err(EncodeError::BoundNotMet { bound: opts.bound });

@@ -158,13 +158,19 @@ type PpcaKey = (usize, usize, Vec<(usize, usize, i32)>);
 
 /// Builds the model of a clip.
 pub fn model(input: &Input<'_>, p: &Params) -> Result<Model, CodecError> {
-    model_with(input, p, &Cache::default())
+    model_with(input, p, &Cache::default(), &|_, _| {})
 }
 
-/// [`model`], reusing what `cache` holds from models of the same input.
-/// Segments are fitted in parallel (rayon); the model is the same for any
-/// number of threads.
-pub fn model_with(input: &Input<'_>, p: &Params, cache: &Cache) -> Result<Model, CodecError> {
+/// [`model`], reusing what `cache` holds from models of the same input,
+/// calling `on_fit(done, total)` as group fits finish (from the fitting
+/// threads). Segments are fitted in parallel (rayon); the model is the
+/// same for any number of threads.
+pub fn model_with(
+    input: &Input<'_>,
+    p: &Params,
+    cache: &Cache,
+    on_fit: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Model, CodecError> {
     let channels = input.values.len();
     let frames = input.values.first().map_or(0, Vec::len);
     if frames == 0 {
@@ -235,9 +241,15 @@ pub fn model_with(input: &Input<'_>, p: &Params, cache: &Cache) -> Result<Model,
             .iter()
             .flat_map(|&(s, e)| (0..groups.len()).map(move |g| (s, e, g)))
             .collect();
+        let done = std::sync::atomic::AtomicUsize::new(0);
         let fits: Vec<Result<GroupModel, CodecError>> = jobs
             .par_iter()
-            .map(|&(s, e, g)| fit_group(input, &groups[g], s, e, p))
+            .map(|&(s, e, g)| {
+                let fit = fit_group(input, &groups[g], s, e, p);
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                on_fit(d, jobs.len());
+                fit
+            })
             .collect();
         let mut fits = fits.into_iter();
         let mut halve = Vec::new();
