@@ -53,18 +53,20 @@ pub struct Params {
     /// Share of `τ` above which a one-frame spike is taken out of the
     /// smooth model, and above which a decoded value gets a patch.
     pub patch_share: f64,
-    /// Longest segment the encoder makes, frames ([`MAX_FIT_FRAMES`]).
+    /// Longest segment the encoder makes, frames ([`MAX_FIT_SECONDS`]).
     pub max_segment: usize,
 }
 
-/// Longest segment the encoder makes, in frames (the format allows
-/// 32 768): choosing a segment's key frames costs the square of its length
-/// (each key dropped is tried by a fit of the whole segment) and the PPCA
-/// window grows with it, so a long stretch without a change of behaviour —
-/// a steady walk of minutes — is cut every `MAX_FIT_FRAMES` at most and the
-/// encode time grows linearly with the clip. No segment of the corpus
-/// comes near (the longest is 570 frames).
-pub const MAX_FIT_FRAMES: usize = 1024;
+/// Longest segment the encoder makes, in seconds (the format allows 32 768
+/// frames): choosing a segment's key frames costs the square of its key
+/// count (each key dropped is tried by a fit of the whole segment) and the
+/// PPCA window grows with the segment, so a long stretch without a change
+/// of behaviour — a steady walk of minutes — is cut every
+/// `MAX_FIT_SECONDS` at most and the encode time grows linearly with the
+/// clip. Keys follow the motion, not the frame rate, hence seconds. No
+/// segment of the corpus comes near (the longest: 570 frames at 120 Hz,
+/// 4.75 s; the iclone files are at most 517 frames at 60 Hz).
+pub const MAX_FIT_SECONDS: f64 = 10.0;
 
 impl Params {
     /// Defaults for a clip at `fps`: the paper's segmentation values scaled
@@ -80,7 +82,7 @@ impl Params {
             blend: ((10.0 * fps / 120.0).round() as usize).max(1),
             jump_ratio: 10.0,
             patch_share: 1.0,
-            max_segment: MAX_FIT_FRAMES,
+            max_segment: ((MAX_FIT_SECONDS * fps).round() as usize).max(64),
         }
     }
 }
