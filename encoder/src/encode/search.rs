@@ -4,6 +4,7 @@
 //! (`pca-spline`).
 
 use mocap_decoder::consts;
+use rayon::prelude::*;
 
 use super::bound::tolerances;
 use super::proof::{prove, Attempt};
@@ -199,10 +200,22 @@ pub(super) fn encode_pca(
     })?;
     // Size and error are not quite monotonic in τ: probe a little above
     // the boundary too and keep the smallest clip that holds.
-    for i in 1..=6 {
+    // The probes are independent: run in parallel, kept in order (the
+    // same clip for any number of threads), each without its decoded
+    // values (only its bytes and metrics are kept).
+    let first = attempts;
+    let probes: Vec<Result<Attempt, EncodeError>> = (1..=6)
+        .into_par_iter()
+        .map(|i| {
+            progress.round(codec, first + i, rounds.max(first + i));
+            let mut a = run(lo * (1.0 + 0.03 * i as f64))?;
+            a.decoded = Vec::new();
+            Ok(a)
+        })
+        .collect();
+    for a in probes {
         attempts += 1;
-        progress.round(codec, attempts, rounds.max(attempts));
-        let a = run(lo * (1.0 + 0.03 * i as f64))?;
+        let a = a?;
         if opts.bound.holds(&a.metrics)
             && best.as_ref().is_none_or(|b| a.bytes.len() < b.bytes.len())
         {
