@@ -7,6 +7,7 @@
 #   SCALING_FRAMES="1000 10000" SCALING_TAKES="cmu/35_01.bvh" SCALING_CODECS="pca-spline" \
 #       SCALING_BOUNDS="1deg" bash scripts/scaling.sh
 #   SCALING_TIMEOUT=3600 (seconds per encode; a row past it says so)
+#   MOCAP=path/to/mocap (a binary to measure instead of building target/release/mocap)
 # The inputs go to a temporary folder, removed at the end. Installs GNU time (package `time`)
 # when /usr/bin/time is missing.
 set -euo pipefail
@@ -20,8 +21,10 @@ codecs="${SCALING_CODECS:-index pca-spline predictive}"
 bounds="${SCALING_BOUNDS:-50mm+arms:10mm 1deg}"
 limit="${SCALING_TIMEOUT:-3600}"
 [ -x /usr/bin/time ] || mocap_ensure_packages time
-cargo build --release -q -p mocap-cli
-mocap="${CARGO_TARGET_DIR:-target}/release/mocap"
+if [ -z "${MOCAP:-}" ]; then
+    cargo build --release -q -p mocap-cli
+fi
+mocap="${MOCAP:-${CARGO_TARGET_DIR:-target}/release/mocap}"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 

@@ -201,9 +201,9 @@ impl System {
         let a = band.a;
         let scale = ridge_scale(&a);
         let mut l = a.clone();
-        factor(&mut l, 0, scale);
+        factor(&mut l, scale);
         let mut y = b.clone();
-        forward(&l, &mut y, k, 0);
+        forward(&l, &mut y, k);
         let mut x = y.clone();
         backward(&l, &mut x, k);
         let mut sys = System {
@@ -562,14 +562,13 @@ fn factor_row(i: usize, mut row: [f64; 4], prev: impl Fn(usize) -> [f64; 4]) -> 
     row
 }
 
-/// Adds the ridge to rows `from..` of `l` (the summed band rows) and
-/// factors them in place, rows above `from` being factored already.
-fn factor(l: &mut [[f64; 4]], from: usize, scale: f64) {
+/// Adds the ridge to `l` (the summed band rows) and factors it in place.
+fn factor(l: &mut [[f64; 4]], scale: f64) {
     let m = l.len();
-    for r in &mut l[from..] {
+    for r in l.iter_mut() {
         r[0] += scale * 1e-12;
     }
-    for i in from..m {
+    for i in 0..m {
         let (done, rest) = l.split_at_mut(i);
         rest[0] = factor_row(i, rest[0], |j| done[j]);
     }
@@ -594,11 +593,10 @@ fn forward_row<'a>(
     }
 }
 
-/// `L y = b` for rows `from..` (`y` holds `b` there and `y` above), `k`
-/// right-hand sides.
-fn forward(l: &[[f64; 4]], y: &mut [f64], k: usize, from: usize) {
+/// `L y = b` in place (`y` holds `b`), `k` right-hand sides.
+fn forward(l: &[[f64; 4]], y: &mut [f64], k: usize) {
     let mut out = vec![0.0; k];
-    for i in from..l.len() {
+    for i in 0..l.len() {
         let (done, rest) = y.split_at_mut(i * k);
         forward_row(i, &l[i], &rest[..k], &mut out, |j| {
             &done[j * k..(j + 1) * k]
@@ -669,8 +667,8 @@ impl Band {
         debug_assert_eq!(self.a.len(), self.m);
         // A tiny ridge keeps rows of keys no frame weighs positive.
         let scale = ridge_scale(&self.a);
-        factor(&mut self.a, 0, scale);
-        forward(&self.a, rhs, k, 0);
+        factor(&mut self.a, scale);
+        forward(&self.a, rhs, k);
         backward(&self.a, rhs, k);
     }
 }
@@ -687,6 +685,73 @@ mod tests {
         let c = fit(&times, &data, 1);
         for (a, b) in c.iter().zip(&data) {
             assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+        }
+    }
+
+    /// The pruning as it was: every trial a full fit of the whole curve.
+    fn prune_by_full_fits(
+        data: &[f64],
+        k: usize,
+        tol: f64,
+        error: &impl Fn(&[f64]) -> f64,
+        mut times: Vec<u32>,
+        mut controls: Vec<f64>,
+    ) -> (Vec<u32>, Vec<f64>) {
+        let (now, _) = worst(data, k, &times, error);
+        let limit = tol.max(now);
+        let mut i = 1;
+        while i + 1 < times.len() {
+            let mut fewer = times.clone();
+            fewer.remove(i);
+            let (w, c) = worst(data, k, &fewer, error);
+            if w <= limit {
+                times = fewer;
+                controls = c;
+            } else {
+                i += 1;
+            }
+        }
+        (times, controls)
+    }
+
+    #[test]
+    fn local_pruning_gives_the_full_fits_numbers() {
+        // Smooth curves with bumps, glitches and a step: many keys, many
+        // dropped, some kept; every tolerance from loose to tight.
+        for (len, k) in [(40, 1), (300, 2), (700, 3)] {
+            let data: Vec<f64> = (0..len)
+                .flat_map(|f| {
+                    let t = f as f64 / 60.0;
+                    (0..k).map(move |j| {
+                        let glitch = if f % 97 == 13 { 40.0 } else { 0.0 };
+                        let step = if f > len / 2 { 25.0 * j as f64 } else { 0.0 };
+                        300.0 * (t * (1.3 + j as f64)).sin()
+                            + 80.0 * (t * 7.1).cos().powi(3)
+                            + glitch
+                            + step
+                    })
+                })
+                .collect();
+            let error = |d: &[f64]| d.iter().map(|x| x * x).sum::<f64>().sqrt();
+            for tol in [0.05, 0.5, 2.0, 8.0, 30.0] {
+                let last = (len - 1) as u32;
+                let mut times: Vec<u32> = (0..=last).step_by(3).collect();
+                if times.last() != Some(&last) {
+                    times.push(last);
+                }
+                let controls = fit(&times, &data, k);
+                let (t1, c1) = prune(&data, k, tol, &error, times.clone(), controls.clone());
+                let (t2, c2) = prune_by_full_fits(&data, k, tol, &error, times.clone(), controls);
+                assert_eq!(t1, t2, "len {len} k {k} tol {tol}");
+                assert!(
+                    c1.iter().zip(&c2).all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "len {len} k {k} tol {tol}: controls differ"
+                );
+                assert!(
+                    t1.len() < times.len(),
+                    "len {len} k {k} tol {tol}: none dropped"
+                );
+            }
         }
     }
 
