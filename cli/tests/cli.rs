@@ -824,3 +824,73 @@ fn bench_auto_from_the_codecs_rows_is_the_encoders_auto() {
     ]);
     assert_eq!(alone, derived);
 }
+
+/// `mocap generate -o` writes the shipped demo byte for byte; `mocap
+/// generate long` walks a take on to any length (here the demo, resampled
+/// to 30 Hz), and its output encodes with no progress bar in a pipe.
+#[test]
+fn generate_the_demo_and_a_long_input() {
+    let d = out_dir("generate");
+    let demo = d.join("demo.bvh");
+    let o = mocap(&["generate", "-o", demo.to_str().expect("utf-8 path")]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let shipped = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../assets/animatronic_demo.bvh"
+    ))
+    .expect("shipped demo");
+    assert_eq!(std::fs::read(&demo).expect("demo"), shipped);
+
+    let long = d.join("long.bvh");
+    let long = long.to_str().expect("utf-8 path");
+    let o = mocap(&[
+        "generate",
+        "long",
+        "--from",
+        "assets/animatronic_demo.bvh",
+        "--frames",
+        "1500",
+        "--fps",
+        "30",
+        "-o",
+        long,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("1500 frames at 30.0 Hz"));
+    let text_bvh = std::fs::read_to_string(long).expect("long");
+    assert!(text_bvh.contains("Frames: 1500\nFrame Time: 0.0333333"));
+
+    let clip = d.join("long.mcb");
+    let o = mocap(&[
+        "encode",
+        long,
+        "-o",
+        clip.to_str().expect("utf-8 path"),
+        "--codec",
+        "pca-spline",
+        "--max-error",
+        "50mm+arms:10mm",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // stderr is a pipe here: no bar, no control characters.
+    assert!(!text(&o.stderr).contains('\r'), "{}", text(&o.stderr));
+
+    let o = mocap(&[
+        "generate",
+        "long",
+        "--from",
+        "assets/animatronic_demo.bvh",
+        "--frames",
+        "10",
+        "--skip",
+        "480",
+        "-o",
+        long,
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        text(&o.stderr).contains("mocap: error: the take has 480 frames after skipping 480"),
+        "{}",
+        text(&o.stderr)
+    );
+}

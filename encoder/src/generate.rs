@@ -7,10 +7,16 @@
 //! eyelid joint, several End Sites, and constant channels. Lengths are in
 //! centimetres (Y up, the figure faces +Z; about 1.35 m tall and 1.5 m
 //! across the outstretched arms of the rest pose), 60 Hz, 8 seconds.
+//!
+//! [`long_take`] makes long inputs of any length from a real take (issue
+//! 15): the take repeated with its root path and heading continued.
 
 use crate::motion::ChannelKind::{self, *};
 use crate::motion::{Joint, Motion, Skeleton};
 use std::f64::consts::{PI, TAU};
+
+mod long;
+pub use long::{long_take, resample, LongError, LongOptions};
 
 /// Frames per second of the demo clip.
 pub const DEMO_RATE_HZ: usize = 60;

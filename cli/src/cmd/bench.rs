@@ -9,6 +9,30 @@ use mocap_report::bench::{self, Baseline, Method};
 use mocap_report::plot;
 
 use super::write;
+use crate::progress::{Bar, Nested};
+
+/// The bench's encodes on one bar, their lines above it.
+struct BarReport(Bar);
+
+impl bench::Report for BarReport {
+    fn encode(
+        &self,
+        at: usize,
+        total: usize,
+        label: &str,
+    ) -> Box<dyn mocap_encoder::encode::Progress + '_> {
+        Box::new(Nested {
+            bar: &self.0,
+            at,
+            units: total,
+            label: label.to_string(),
+        })
+    }
+
+    fn line(&self, line: &str) {
+        self.0.println(line);
+    }
+}
 
 /// `--codec` of `mocap bench`: our codecs and the size references.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -100,7 +124,10 @@ fn methods(a: &Args) -> Vec<Method> {
 }
 
 pub fn run(a: Args) -> super::Result {
-    let rows = bench::run(&a.paths, &methods(&a), &a.max_error)?;
+    let bar = BarReport(Bar::new(1));
+    let rows = bench::run_with(&a.paths, &methods(&a), &a.max_error, &bar);
+    bar.0.finish();
+    let rows = rows?;
     if a.summary {
         print!("{}", bench::summary(&rows));
     } else {

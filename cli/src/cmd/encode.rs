@@ -144,7 +144,10 @@ pub fn run(a: Args) -> super::Result {
         metres_per_unit: unit.metres(),
         key_interval: a.key_interval,
     };
-    let enc = encode::encode(&m, &opts)?;
+    let bar = crate::progress::Bar::new(1);
+    let enc = encode::encode_with(&m, &opts, &bar);
+    bar.finish();
+    let enc = enc?;
     write(&a.output, &enc.bytes)?;
     let file_bytes = std::fs::metadata(&a.input).map(|m| m.len()).unwrap_or(0);
     let x = &enc.metrics;

@@ -46,7 +46,18 @@ fn build(a: BuildArgs) -> super::Result {
             .map(|r| format!(" on the rig {}", r.display()))
             .unwrap_or_default()
     );
-    let built = show::build(&spec)?;
+    let bar = crate::progress::Bar::new(spec.clips.len());
+    let built = show::build_with(&spec, &|at, units, name| {
+        bar.unit(at, units, format!("clip {name}"));
+        Box::new(crate::progress::Nested {
+            bar: &bar,
+            at,
+            units,
+            label: format!("clip {name}"),
+        })
+    });
+    bar.finish();
+    let built = built?;
     write(&a.output, &built.bytes)?;
     print!("{}", show::report(&a.output, &spec, &built));
     Ok(())

@@ -11,6 +11,8 @@ use mocap_decoder::consts::predictive::{
 
 use mocap_decoder::predictive::{predict, value};
 
+use rayon::prelude::*;
+
 use super::CodecError;
 use crate::container::{varint, zigzag, ByteCursor};
 
@@ -55,6 +57,23 @@ impl Mode {
 /// every decoded value within `tol[c]` of the input, in blocks of
 /// `block_frames` frames.
 pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Encoded, CodecError> {
+    encode_with(values, tol, block_frames, &|_, _| {})
+}
+
+/// [`encode`], calling `on_channel(done, total)` as channels are searched
+/// (from the encoding threads; twice per channel: its step, its residuals).
+pub fn encode_with(
+    values: &[Vec<i32>],
+    tol: &[i64],
+    block_frames: u32,
+    on_channel: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Encoded, CodecError> {
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let total = 2 * values.len();
+    let tick = || {
+        let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        on_channel(d, total);
+    };
     let frames = values.first().map_or(0, Vec::len);
     if frames == 0 || values.iter().any(|v| v.len() != frames) || tol.len() != values.len() {
         return Err(CodecError::PredictiveShape);
@@ -82,47 +101,61 @@ pub fn encode(values: &[Vec<i32>], tol: &[i64], block_frames: u32) -> Result<Enc
         .unwrap_or(1);
     // Per channel, the predictor and step whose greedy residuals cost the
     // least (each channel alone, a fresh model: a proxy for the shared one).
-    let mut modes = Vec::with_capacity(values.len());
-    let mut greedy = Vec::with_capacity(values.len());
-    for ((v, &t), c) in values.iter().zip(&tol).zip(&constant) {
-        if let Some(k) = c {
-            modes.push(Mode::Constant(*k));
-            greedy.push(Vec::new());
-            continue;
-        }
-        let mut best: Option<(f64, Mode, Vec<i64>)> = None;
-        for m in multipliers(t, unit) {
-            for weight in 0..PREDICTOR_WEIGHTS.len() {
-                let q = quantise_greedy(v, t, m as i64 * unit, weight, block);
-                let cost = adaptive_cost(&q, block);
-                if best.as_ref().is_none_or(|b| cost < b.0) {
-                    best = Some((
-                        cost,
-                        Mode::Predicted {
-                            weight,
-                            multiplier: m,
-                        },
-                        q,
-                    ));
+    // Channels are independent: in parallel, in channel order.
+    let chosen: Vec<Result<(Mode, Vec<i64>), CodecError>> = values
+        .par_iter()
+        .zip(&tol)
+        .zip(&constant)
+        .map(|((v, &t), c)| {
+            tick();
+            if let Some(k) = c {
+                return Ok((Mode::Constant(*k), Vec::new()));
+            }
+            let mut best: Option<(f64, Mode, Vec<i64>)> = None;
+            for m in multipliers(t, unit) {
+                for weight in 0..PREDICTOR_WEIGHTS.len() {
+                    let q = quantise_greedy(v, t, m as i64 * unit, weight, block);
+                    let cost = adaptive_cost(&q, block);
+                    if best.as_ref().is_none_or(|b| cost < b.0) {
+                        best = Some((
+                            cost,
+                            Mode::Predicted {
+                                weight,
+                                multiplier: m,
+                            },
+                            q,
+                        ));
+                    }
                 }
             }
-        }
-        let (_, mode, q) = best.ok_or(CodecError::NoPredictiveStep)?;
+            let (_, mode, q) = best.ok_or(CodecError::NoPredictiveStep)?;
+            Ok((mode, q))
+        })
+        .collect();
+    let mut modes = Vec::with_capacity(values.len());
+    let mut greedy = Vec::with_capacity(values.len());
+    for one in chosen {
+        let (mode, q) = one?;
         modes.push(mode);
         greedy.push(q);
     }
     // Residuals by beam search under static costs learnt from the greedy
     // residuals of every channel.
     let costs = StaticCosts::learn(&greedy, block);
-    let mut residuals = Vec::with_capacity(values.len());
-    for ((v, &t), mode) in values.iter().zip(&tol).zip(&modes) {
-        residuals.push(match *mode {
-            Mode::Constant(_) => Vec::new(),
-            Mode::Predicted { weight, multiplier } => {
-                beam_search(v, t, i64::from(multiplier) * unit, weight, block, &costs)
+    let residuals: Vec<Vec<i64>> = values
+        .par_iter()
+        .zip(&tol)
+        .zip(&modes)
+        .map(|((v, &t), mode)| {
+            tick();
+            match *mode {
+                Mode::Constant(_) => Vec::new(),
+                Mode::Predicted { weight, multiplier } => {
+                    beam_search(v, t, i64::from(multiplier) * unit, weight, block, &costs)
+                }
             }
-        });
-    }
+        })
+        .collect();
     // The stream, block by block, frame-major as the decoder reads it.
     let mut blocks = Vec::new();
     for start in (0..frames).step_by(block) {
@@ -306,6 +339,21 @@ fn reconstruct(q: &[i64], step: i64, weight: usize, block: usize) -> Vec<i32> {
 
 /// Bits of `x` with probability-of-zero `p` (of 2^PROB_BITS).
 fn bit_cost(p: u16, bit: u32) -> f64 {
+    // Every (p, bit) computed once: the step search asks for them for every
+    // decision of every candidate.
+    static TABLE: std::sync::OnceLock<Vec<[f64; 2]>> = std::sync::OnceLock::new();
+    let table = TABLE.get_or_init(|| {
+        (0..=1u32 << PROB_BITS)
+            .map(|p| [0, 1].map(|b| bit_cost_of(p as u16, b)))
+            .collect()
+    });
+    match table.get(usize::from(p)) {
+        Some(c) => c[usize::from(bit != 0)],
+        None => bit_cost_of(p, bit),
+    }
+}
+
+fn bit_cost_of(p: u16, bit: u32) -> f64 {
     let p0 = f64::from(p) / f64::from(1u32 << PROB_BITS);
     -(if bit == 0 { p0 } else { 1.0 - p0 }).log2()
 }
@@ -378,7 +426,13 @@ fn adaptive_cost(q: &[i64], block: usize) -> f64 {
 struct StaticCosts {
     counts: Vec<std::collections::HashMap<i64, f64>>,
     totals: Vec<f64>,
+    /// [`StaticCosts::cost`] of the residuals `-NEAR..=NEAR` per context,
+    /// computed once (the search asks for them millions of times).
+    near: Vec<Vec<f64>>,
 }
+
+/// Residuals whose costs [`StaticCosts`] keeps in a table.
+const NEAR: i64 = 64;
 
 impl StaticCosts {
     fn learn(residuals: &[Vec<i64>], block: usize) -> Self {
@@ -395,10 +449,25 @@ impl StaticCosts {
                 ctx = context(k);
             }
         }
-        StaticCosts { counts, totals }
+        let mut costs = StaticCosts {
+            counts,
+            totals,
+            near: Vec::new(),
+        };
+        costs.near = (0..CONTEXTS)
+            .map(|ctx| (-NEAR..=NEAR).map(|q| costs.compute(ctx, q)).collect())
+            .collect();
+        costs
     }
 
     fn cost(&self, ctx: usize, q: i64) -> f64 {
+        if (-NEAR..=NEAR).contains(&q) {
+            return self.near[ctx][(q + NEAR) as usize];
+        }
+        self.compute(ctx, q)
+    }
+
+    fn compute(&self, ctx: usize, q: i64) -> f64 {
         let seen = self.counts[ctx].get(&q).copied().unwrap_or(0.0);
         // Unseen residuals cost about what their escape code would.
         let unseen = 2.0 * (q.unsigned_abs() as f64 + 1.0).log2();
@@ -427,7 +496,9 @@ fn beam_search(
     block: usize,
     costs: &StaticCosts,
 ) -> Vec<i64> {
-    let mut layers: Vec<Vec<Node>> = Vec::with_capacity(x.len());
+    // Per frame, each kept state's (predecessor, residual): all the way
+    // back is all the search needs of a layer.
+    let mut layers: Vec<Vec<(usize, i64)>> = Vec::with_capacity(x.len());
     let root = Node {
         v1: 0,
         v2: 0,
@@ -471,14 +542,13 @@ fn beam_search(
         }
         next.sort_by(|a, b| a.cost.total_cmp(&b.cost));
         next.truncate(BEAM);
-        layers.push(next.clone());
+        layers.push(next.iter().map(|n| (n.back, n.q)).collect());
         prev = next;
     }
     let mut q = vec![0; x.len()];
     let mut at = 0;
     for (f, layer) in layers.iter().enumerate().rev() {
-        q[f] = layer[at].q;
-        at = layer[at].back;
+        (at, q[f]) = layer[at];
     }
     q
 }

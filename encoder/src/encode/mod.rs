@@ -121,8 +121,40 @@ fn joined(errors: &[(CodecChoice, EncodeError)]) -> String {
     each.join("; ")
 }
 
+/// What an encode reports while it runs, for a progress bar: the library
+/// never prints (the `mocap` command line draws the bar). Methods are
+/// called from the encoding threads.
+pub trait Progress: Sync {
+    /// The search of `codec` starts its round `round` (from 1) of about
+    /// `rounds`; each round encodes, decodes and measures the whole clip.
+    fn round(&self, codec: CodecChoice, round: usize, rounds: usize) {
+        let _ = (codec, round, rounds);
+    }
+
+    /// Within the current round, `done` of `total` pieces of work are
+    /// finished (`pca-spline`: segment fits; `predictive`: channels).
+    fn work(&self, done: usize, total: usize) {
+        let _ = (done, total);
+    }
+}
+
+/// No progress reports.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Silent;
+
+impl Progress for Silent {}
+
 /// Encodes `m`, proving the bound by decoding; errors say why it cannot.
 pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, EncodeError> {
+    encode_with(m, opts, &Silent)
+}
+
+/// [`encode`], reporting its progress to `progress`.
+pub fn encode_with(
+    m: &Motion,
+    opts: &EncodeOptions,
+    progress: &dyn Progress,
+) -> Result<Encoded, EncodeError> {
     if m.frames() == 0 || m.channels() == 0 {
         return Err(EncodeError::Empty);
     }
@@ -136,8 +168,8 @@ pub fn encode(m: &Motion, opts: &EncodeOptions) -> Result<Encoded, EncodeError> 
             ..opts.clone()
         };
         match codec {
-            CodecChoice::PcaSpline => encode_pca(m, &input, &one),
-            _ => encode_by_tolerance(m, &input, &one),
+            CodecChoice::PcaSpline => encode_pca(m, &input, &one, progress),
+            _ => encode_by_tolerance(m, &input, &one, progress),
         }
     };
     if opts.codec != CodecChoice::Auto {

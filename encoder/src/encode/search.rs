@@ -4,10 +4,11 @@
 //! (`pca-spline`).
 
 use mocap_decoder::consts;
+use rayon::prelude::*;
 
 use super::proof::{prove, Attempt};
 use super::reference::Reference;
-use super::{Bound, CodecChoice, EncodeError, EncodeOptions, Encoded};
+use super::{Bound, CodecChoice, EncodeError, EncodeOptions, Encoded, Progress};
 use crate::codec::{index, pca_spline, predictive};
 use crate::fixed::FixedChannels;
 use crate::metrics::Metrics;
@@ -26,6 +27,7 @@ fn attempt(
     input: &Reference,
     tol: &[i64],
     opts: &EncodeOptions,
+    progress: &dyn Progress,
 ) -> Result<Attempt, EncodeError> {
     let fixed = &input.fixed;
     if opts.codec == CodecChoice::Predictive {
@@ -33,7 +35,7 @@ fn attempt(
             Some(k) => u32::from(k.max(1)),
             None => ((predictive::DEFAULT_BLOCK_SECONDS / m.frame_time).round() as u32).max(1),
         };
-        let enc = predictive::encode(&fixed.values, tol, block)?;
+        let enc = predictive::encode_with(&fixed.values, tol, block, &|d, t| progress.work(d, t))?;
         let expected = FixedChannels {
             kinds: fixed.kinds.clone(),
             values: enc.decoded,
@@ -84,11 +86,13 @@ fn bisect<T: Trial, E>(
     steps: usize,
     ratio: f64,
     mut run: impl FnMut(f64) -> Result<T, E>,
+    mut round: impl FnMut(usize),
 ) -> Result<(Option<T>, f64, usize), E> {
     let mut best: Option<T> = None;
     let mut attempts = 0;
     for _ in 0..steps {
         attempts += 1;
+        round(attempts);
         let x = (lo * hi).sqrt();
         let a = run(x)?;
         if bound.holds(a.metrics()) {
@@ -106,12 +110,28 @@ fn bisect<T: Trial, E>(
     Ok((best, lo, attempts))
 }
 
+/// How many rounds [`bisect`] makes: the ratio `hi / lo` is square-rooted
+/// each round, whatever the outcome.
+fn bisect_rounds((lo, hi): (f64, f64), steps: usize, ratio: f64) -> usize {
+    let mut r = (hi / lo).ln();
+    let mut n = 0;
+    while n < steps {
+        n += 1;
+        r /= 2.0;
+        if r < ratio.ln() {
+            break;
+        }
+    }
+    n
+}
+
 /// Encodes with `pca-spline`, searching the tolerance `τ` (log-bisection)
 /// for the smallest clip whose decoded output meets the bound.
 pub(super) fn encode_pca(
     m: &Motion,
     reference: &Reference,
     opts: &EncodeOptions,
+    progress: &dyn Progress,
 ) -> Result<Encoded, EncodeError> {
     let Reference {
         fixed,
@@ -143,9 +163,11 @@ pub(super) fn encode_pca(
         (None, None) => Bound::DEFAULT_TRANSLATION_MM,
     };
     let fps = 1.0 / m.frame_time;
+    let cache = pca_spline::Cache::default();
     let run = |tau: f64| -> Result<Attempt, EncodeError> {
         let params = pca_spline::Params::new(tau, fps);
-        let mut model = pca_spline::model(&input, &params)?;
+        let mut model =
+            pca_spline::model_with(&input, &params, &cache, &|d, t| progress.work(d, t))?;
         let try_model = |model: &pca_spline::Model| {
             let section = model.to_section(fixed.kinds.len());
             prove(
@@ -164,13 +186,30 @@ pub(super) fn encode_pca(
         }
         try_model(&model)
     };
-    let (mut best, lo, mut attempts) =
-        bisect(&opts.bound, (scale / 256.0, scale * 2.0), 20, 1.02, run)?;
+    let range = (scale / 256.0, scale * 2.0);
+    let rounds = bisect_rounds(range, 20, 1.02) + 6;
+    let codec = CodecChoice::PcaSpline;
+    let (mut best, lo, mut attempts) = bisect(&opts.bound, range, 20, 1.02, run, |n| {
+        progress.round(codec, n, rounds)
+    })?;
     // Size and error are not quite monotonic in τ: probe a little above
-    // the boundary too and keep the smallest clip that holds.
-    for i in 1..=6 {
+    // the boundary too and keep the smallest clip that holds. The probes
+    // are independent: run in parallel, kept in order (the same clip for
+    // any number of threads), each without its decoded values (only its
+    // bytes and metrics are kept).
+    let first = attempts;
+    let probes: Vec<Result<Attempt, EncodeError>> = (1..=6)
+        .into_par_iter()
+        .map(|i| {
+            progress.round(codec, first + i, rounds.max(first + i));
+            let mut a = run(lo * (1.0 + 0.03 * i as f64))?;
+            a.decoded = Vec::new();
+            Ok(a)
+        })
+        .collect();
+    for a in probes {
         attempts += 1;
-        let a = run(lo * (1.0 + 0.03 * i as f64))?;
+        let a = a?;
         if opts.bound.holds(&a.metrics)
             && best.as_ref().is_none_or(|b| a.bytes.len() < b.bytes.len())
         {
@@ -181,6 +220,7 @@ pub(super) fn encode_pca(
         Some(b) => b,
         None => {
             attempts += 1;
+            progress.round(codec, attempts, attempts);
             let a = run(lo)?;
             if !opts.bound.holds(&a.metrics) {
                 return Err(EncodeError::PcaBoundNotMet {
@@ -207,9 +247,14 @@ pub(super) fn encode_by_tolerance(
     m: &Motion,
     input: &Reference,
     opts: &EncodeOptions,
+    progress: &dyn Progress,
 ) -> Result<Encoded, EncodeError> {
-    let (best, attempts) =
-        search_tolerances(input, &opts.bound, |tol| attempt(m, input, tol, opts))?;
+    let (best, attempts) = search_tolerances_with(
+        input,
+        &opts.bound,
+        |tol| attempt(m, input, tol, opts, progress),
+        |n, rounds| progress.round(opts.codec, n, rounds),
+    )?;
     Ok(Encoded {
         bytes: best.bytes,
         metrics: best.metrics,
@@ -232,7 +277,18 @@ pub(super) fn encode_by_tolerance(
 pub fn search_tolerances<T: Trial, E: From<EncodeError>>(
     input: &Reference,
     bound: &Bound,
+    run: impl FnMut(&[i64]) -> Result<T, E>,
+) -> Result<(T, usize), E> {
+    search_tolerances_with(input, bound, run, |_, _| {})
+}
+
+/// [`search_tolerances`], calling `round(n, rounds)` as try `n` (from 1) of
+/// about `rounds` starts.
+fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
+    input: &Reference,
+    bound: &Bound,
     mut run: impl FnMut(&[i64]) -> Result<T, E>,
+    mut round: impl FnMut(usize, usize),
 ) -> Result<(T, usize), E> {
     let mut attempts = 0;
     let mut tighten = 1.0;
@@ -240,6 +296,7 @@ pub fn search_tolerances<T: Trial, E: From<EncodeError>>(
     let best = match bound.position_mm {
         None => loop {
             attempts += 1;
+            round(attempts, attempts);
             let a = run(None, tighten)?;
             if bound.holds(a.metrics()) {
                 break a;
@@ -255,14 +312,22 @@ pub fn search_tolerances<T: Trial, E: From<EncodeError>>(
         },
         Some(p) => {
             let bound_um = p * 1000.0;
-            let (best, lo, n) = bisect(bound, (bound_um * 1e-3, bound_um), 14, 1.03, |s| {
-                run(Some(s), 1.0)
-            })?;
+            let range = (bound_um * 1e-3, bound_um);
+            let rounds = bisect_rounds(range, 14, 1.03);
+            let (best, lo, n) = bisect(
+                bound,
+                range,
+                14,
+                1.03,
+                |s| run(Some(s), 1.0),
+                |n| round(n, rounds),
+            )?;
             attempts += n;
             match best {
                 Some(b) => b,
                 None => {
                     attempts += 1;
+                    round(attempts, attempts);
                     let a = run(Some(lo), 1.0)?;
                     if !bound.holds(a.metrics()) {
                         return Err(EncodeError::BoundNotMet { bound: *bound }.into());

@@ -188,6 +188,15 @@ struct Single {
 
 /// Builds the show `spec` describes.
 pub fn build(spec: &ShowSpec) -> Result<BuiltShow, ShowError> {
+    build_with(spec, &|_, _, _| Box::new(encode::Silent))
+}
+
+/// [`build`], each clip's encode reporting to `progress(clip, clips,
+/// name)`.
+pub fn build_with<'a>(
+    spec: &ShowSpec,
+    progress: &dyn Fn(usize, usize, &str) -> Box<dyn encode::Progress + 'a>,
+) -> Result<BuiltShow, ShowError> {
     let rig = spec
         .rig
         .as_ref()
@@ -238,6 +247,7 @@ pub fn build(spec: &ShowSpec) -> Result<BuiltShow, ShowError> {
             }
         }
         let unit = declared.get(&c.file).copied();
+        let p = progress(k, spec.clips.len(), &c.name);
         singles.push(encode_one(
             c,
             &cut,
@@ -245,6 +255,7 @@ pub fn build(spec: &ShowSpec) -> Result<BuiltShow, ShowError> {
             range,
             m.frame_time,
             unit,
+            p.as_ref(),
         )?);
     }
     assemble_show(spec, &singles)
@@ -318,6 +329,7 @@ fn encode_one(
     range: (usize, usize),
     source_frame_time: f64,
     declared: Option<LengthUnit>,
+    progress: &dyn encode::Progress,
 ) -> Result<Single, ShowError> {
     let unit = c.units.or(declared).unwrap_or_else(|| units::detect(m));
     let file = c.file.display().to_string();
@@ -356,7 +368,7 @@ fn encode_one(
             range,
         });
     }
-    let enc = encode::encode(
+    let enc = encode::encode_with(
         m,
         &EncodeOptions {
             codec: c.codec,
@@ -364,6 +376,7 @@ fn encode_one(
             metres_per_unit: unit.metres(),
             key_interval: None,
         },
+        progress,
     )
     .map_err(|source| ShowError::Encode {
         clip: c.name.clone(),

@@ -197,7 +197,12 @@ impl Source {
     }
 
     /// Encodes with one of our codecs (a marker clip with its mask).
-    fn encode(&self, codec: CodecChoice, bound: &Bound) -> Result<(Encoded, f64), BenchError> {
+    fn encode(
+        &self,
+        codec: CodecChoice,
+        bound: &Bound,
+        progress: &dyn encode::Progress,
+    ) -> Result<(Encoded, f64), BenchError> {
         let opts = EncodeOptions {
             codec,
             bound: *bound,
@@ -214,9 +219,11 @@ impl Source {
                     })?
                     .encoded
             }
-            None => encode::encode(&self.motion, &opts).map_err(|source| BenchError::Encode {
-                file: self.path.clone(),
-                source,
+            None => encode::encode_with(&self.motion, &opts, progress).map_err(|source| {
+                BenchError::Encode {
+                    file: self.path.clone(),
+                    source,
+                }
             })?,
         };
         Ok((enc, t.elapsed().as_secs_f64()))
@@ -253,6 +260,7 @@ struct RowOf<'a> {
     source: &'a Source,
     bound: &'a Bound,
     bound_name: &'a str,
+    report: &'a dyn Report,
 }
 
 impl RowOf<'_> {
@@ -282,14 +290,14 @@ impl RowOf<'_> {
         let values = m.frames() * m.channels();
         metrics.ratio_file = s.file_bytes as f64 / metrics.bytes.max(1) as f64;
         let without = metrics.bytes.saturating_sub(header_bytes);
-        eprintln!(
+        self.report.line(&format!(
             "  {} {} @ {}: {} bytes, ratio {:.1}",
             s.path.display(),
             method.name(),
             self.bound_name,
             metrics.bytes,
             metrics.ratio_f32
-        );
+        ));
         Row {
             group: group_of(&s.path),
             file: s.name(),
@@ -336,6 +344,39 @@ pub fn run(
     methods: &[Method],
     bounds: &[String],
 ) -> Result<Vec<Row>, BenchError> {
+    run_with(paths, methods, bounds, &Stderr)
+}
+
+/// Where a bench reports as it runs.
+pub trait Report {
+    /// The progress of encode `at` (from 0) of about `total` (one file with
+    /// one method at one bound, `label`).
+    fn encode(&self, at: usize, total: usize, label: &str) -> Box<dyn encode::Progress + '_>;
+    /// A finished row's line (`  file method @ bound: N bytes, ratio R`),
+    /// or a note.
+    fn line(&self, line: &str);
+}
+
+/// [`Report`] on stderr: each row's line, no progress.
+pub struct Stderr;
+
+impl Report for Stderr {
+    fn encode(&self, _: usize, _: usize, _: &str) -> Box<dyn encode::Progress + '_> {
+        Box::new(encode::Silent)
+    }
+
+    fn line(&self, line: &str) {
+        eprintln!("{line}");
+    }
+}
+
+/// [`run`], reporting to `report`.
+pub fn run_with(
+    paths: &[PathBuf],
+    methods: &[Method],
+    bounds: &[String],
+    report: &dyn Report,
+) -> Result<Vec<Row>, BenchError> {
     let specs = parse_bounds(bounds)?;
     let files = mocap_encoder::input::expand_where(paths, |p| {
         mocap_encoder::input::is_motion_file(p) || c3d::is_c3d(p)
@@ -343,6 +384,7 @@ pub fn run(
     let derive_auto = AUTO_CODECS
         .iter()
         .all(|c| methods.contains(&Method::Codec(*c)));
+    let total = files.len() * methods.len() * specs.len();
     let mut rows = Vec::new();
     for file in &files {
         let source = Source::read(file)?;
@@ -354,19 +396,23 @@ pub fn run(
         let mut raw16: Option<(baseline::Coded, f64)> = None;
         for (bound, name) in specs.iter().zip(bounds) {
             if source.markers.is_some() && bound.angle_deg.is_some() {
-                eprintln!(
+                report.line(&format!(
                     "  {}: skipped at {name}: a marker clip has no rotation channels (give a length)",
                     file.display()
-                );
+                ));
                 continue;
             }
             let of = RowOf {
                 source: &source,
                 bound,
                 bound_name: name,
+                report,
             };
             let mut ours: Vec<(CodecChoice, Encoded, f64)> = Vec::new();
             for &method in methods {
+                let label = format!("{} {} @ {name}", file.display(), method.name());
+                let progress = report.encode(rows.len(), total, &label);
+                let progress = progress.as_ref();
                 match method {
                     Method::Codec(CodecChoice::Auto) if derive_auto => {
                         let (enc, secs) = match auto_from(&ours) {
@@ -375,12 +421,12 @@ pub fn run(
                                 source,
                             })?,
                             // The three codecs come later in the list.
-                            None => source.encode(CodecChoice::Auto, bound)?,
+                            None => source.encode(CodecChoice::Auto, bound, progress)?,
                         };
                         rows.push(of.clip(method, &enc, secs));
                     }
                     Method::Codec(codec) => {
-                        let (enc, secs) = source.encode(codec, bound)?;
+                        let (enc, secs) = source.encode(codec, bound, progress)?;
                         rows.push(of.clip(method, &enc, secs));
                         ours.push((codec, enc, secs));
                     }

@@ -17,9 +17,13 @@ pub mod section;
 pub mod segment;
 pub mod weights;
 
+use std::collections::HashMap;
+use std::sync::Mutex;
+
 use mocap_decoder::consts::pca::{
     MAX_COMPONENTS, MAX_MEAN_SHIFT, MAX_SEGMENT_FRAMES, MAX_VALUE_BITS, MAX_VALUE_SHIFT,
 };
+use rayon::prelude::*;
 
 pub use section::{inspect, SectionInfo};
 pub use segment::Ppca;
@@ -49,7 +53,20 @@ pub struct Params {
     /// Share of `τ` above which a one-frame spike is taken out of the
     /// smooth model, and above which a decoded value gets a patch.
     pub patch_share: f64,
+    /// Longest segment the encoder makes, frames ([`MAX_FIT_SECONDS`]).
+    pub max_segment: usize,
 }
+
+/// Longest segment the encoder makes, in seconds (the format allows 32 768
+/// frames): choosing a segment's key frames costs the square of its key
+/// count (each key dropped is tried by a fit of the whole segment) and the
+/// PPCA window grows with the segment, so a long stretch without a change
+/// of behaviour — a steady walk of minutes — is cut every
+/// `MAX_FIT_SECONDS` at most and the encode time grows linearly with the
+/// clip. Keys follow the motion, not the frame rate, hence seconds. No
+/// segment of the corpus comes near (the longest: 570 frames at 120 Hz,
+/// 4.75 s; the iclone files are at most 517 frames at 60 Hz).
+pub const MAX_FIT_SECONDS: f64 = 10.0;
 
 impl Params {
     /// Defaults for a clip at `fps`: the paper's segmentation values scaled
@@ -65,6 +82,7 @@ impl Params {
             blend: ((10.0 * fps / 120.0).round() as usize).max(1),
             jump_ratio: 10.0,
             patch_share: 1.0,
+            max_segment: ((MAX_FIT_SECONDS * fps).round() as usize).max(64),
         }
     }
 }
@@ -127,13 +145,40 @@ pub struct GroupModel {
     pub codes: Vec<u32>,
 }
 
+/// What [`model_with`] keeps between models of one input at different
+/// tolerances: the PPCA cuts of each stretch of the body's motion, which
+/// only change where the despiked frames do. Use one cache per input.
+#[derive(Default)]
+pub struct Cache {
+    /// (first frame, end, the body's despiked values in it) → cuts.
+    ppca: Mutex<HashMap<PpcaKey, Vec<usize>>>,
+}
+
+/// A stretch of frames and the despiked values in it: (frame, body
+/// channel, value), sorted.
+type PpcaKey = (usize, usize, Vec<(usize, usize, i32)>);
+
 /// Builds the model of a clip.
 pub fn model(input: &Input<'_>, p: &Params) -> Result<Model, CodecError> {
+    model_with(input, p, &Cache::default(), &|_, _| {})
+}
+
+/// [`model`], reusing what `cache` holds from models of the same input,
+/// calling `on_fit(done, total)` as group fits finish (from the fitting
+/// threads). Segments are fitted in parallel (rayon); the model is the
+/// same for any number of threads.
+pub fn model_with(
+    input: &Input<'_>,
+    p: &Params,
+    cache: &Cache,
+    on_fit: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Model, CodecError> {
     let channels = input.values.len();
     let frames = input.values.first().map_or(0, Vec::len);
     if frames == 0 {
         return Err(CodecError::NoFrames);
     }
+    let original = input.values;
     // Model the motion without its one-frame spikes; patches restore them.
     let clean: Vec<Vec<i32>> = input
         .values
@@ -170,21 +215,82 @@ pub fn model(input: &Input<'_>, p: &Params) -> Result<Model, CodecError> {
         .copied()
         .collect();
     body.sort_unstable();
-    let starts = segment_starts(input, &body, frames, p);
-    let ends = segment_ends(&starts, frames, p.blend);
-    let mut segments = Vec::with_capacity(starts.len());
-    for (&(start, _), &end) in starts.iter().zip(&ends) {
-        let groups = groups
+    let mut despiked: Vec<(usize, usize, i32)> = body
+        .iter()
+        .enumerate()
+        .flat_map(|(i, &c)| {
+            let (a, b) = (&original[c], &clean[c]);
+            (0..frames)
+                .filter(move |&f| a[f] != b[f])
+                .map(move |f| (f, i, b[f]))
+        })
+        .collect();
+    despiked.sort_unstable();
+    let mut starts = segment_starts(input, &body, frames, p, cache, &despiked);
+    // Fit every segment; a segment whose coefficients leave the format's
+    // range (a root travelling tens of metres in one segment) is halved
+    // until they fit.
+    let mut fitted: HashMap<(usize, usize), Vec<GroupModel>> = HashMap::new();
+    let ends = loop {
+        let ends = segment_ends(&starts, frames, p.blend);
+        let todo: Vec<(usize, usize)> = starts
             .iter()
-            .map(|g| fit_group(input, g, start, end, p))
-            .collect::<Result<Vec<_>, CodecError>>()?;
-        segments.push(SegmentModel {
+            .zip(&ends)
+            .map(|(&(s, _), &e)| (s, e))
+            .filter(|span| !fitted.contains_key(span))
+            .collect();
+        let jobs: Vec<(usize, usize, usize)> = todo
+            .iter()
+            .flat_map(|&(s, e)| (0..groups.len()).map(move |g| (s, e, g)))
+            .collect();
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let fits: Vec<Result<GroupModel, CodecError>> = jobs
+            .par_iter()
+            .map(|&(s, e, g)| {
+                let fit = fit_group(input, &groups[g], s, e, p);
+                let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                on_fit(d, jobs.len());
+                fit
+            })
+            .collect();
+        let mut fits = fits.into_iter();
+        let mut halve = Vec::new();
+        for &(s, e) in &todo {
+            let one: Vec<_> = fits.by_ref().take(groups.len()).collect();
+            match one.into_iter().collect::<Result<Vec<_>, CodecError>>() {
+                Ok(g) => {
+                    fitted.insert((s, e), g);
+                }
+                Err(err) => {
+                    let i = starts.partition_point(|&(x, _)| x < s);
+                    let next = starts.get(i + 1).map_or(frames, |&(x, _)| x);
+                    let splittable = matches!(
+                        err,
+                        CodecError::CoefficientOutOfRange { .. } | CodecError::KeyRangeTooWide
+                    );
+                    if !splittable || next - s < 4 {
+                        return Err(err);
+                    }
+                    halve.push((s + (next - s) / 2, false));
+                }
+            }
+        }
+        if halve.is_empty() {
+            break ends;
+        }
+        starts.extend(halve);
+        starts.sort_unstable();
+    };
+    let segments = starts
+        .iter()
+        .zip(&ends)
+        .map(|(&(start, _), &end)| SegmentModel {
             start: start as u32,
             end: end as u32,
-            groups,
+            groups: fitted.remove(&(start, end)).unwrap_or_default(),
             patches: Vec::new(),
-        });
-    }
+        })
+        .collect();
     Ok(Model {
         groups,
         consts,
@@ -209,11 +315,15 @@ fn despike(v: &[i32], w: f64, tol: f64) -> Vec<i32> {
 }
 
 /// Segment starts, each with whether it follows a jump (no blending).
+/// `despiked` lists the body's despiked values (frame, body channel,
+/// value), sorted: with the input, they decide the PPCA cuts `cache` holds.
 fn segment_starts(
     input: &Input<'_>,
     body: &[usize],
     frames: usize,
     p: &Params,
+    cache: &Cache,
+    despiked: &[(usize, usize, i32)],
 ) -> Vec<(usize, bool)> {
     let weighted = |chs: &[usize]| -> Vec<f64> {
         (0..frames)
@@ -229,22 +339,38 @@ fn segment_starts(
     let jumps = segment::jumps(&y, body.len(), p.jump_ratio, 4.0 * p.tolerance);
     let mut starts = vec![(0usize, true)];
     starts.extend(jumps.iter().map(|&j| (j, true)));
+    // Respect the format's longest segment, and the encoder's.
+    let max = (MAX_SEGMENT_FRAMES as usize - p.blend - 2).min(p.max_segment.max(1));
     let mut out = Vec::new();
     for (i, &(s, jump)) in starts.iter().enumerate() {
         let e = starts.get(i + 1).map_or(frames, |&(n, _)| n);
         out.push((s, jump));
         let mut cuts = match &p.ppca {
-            Some(pp) if !body.is_empty() => segment::ppca_cuts(&y, body.len(), s, e, pp),
+            Some(pp) if !body.is_empty() => {
+                let lo = despiked.partition_point(|&(f, _, _)| f < s);
+                let hi = despiked.partition_point(|&(f, _, _)| f < e);
+                let key = (s, e, despiked[lo..hi].to_vec());
+                let known = cache.ppca.lock().ok().and_then(|c| c.get(&key).cloned());
+                match known {
+                    Some(cuts) => cuts,
+                    None => {
+                        let cuts = segment::ppca_cuts(&y, body.len(), s, e, pp, max);
+                        if let Ok(mut c) = cache.ppca.lock() {
+                            c.insert(key, cuts.clone());
+                        }
+                        cuts
+                    }
+                }
+            }
             _ => Vec::new(),
         };
-        // Respect the format's longest segment.
-        let max = MAX_SEGMENT_FRAMES as usize - p.blend - 2;
+        // Stretches longer than `max`: cut evenly.
         let mut last = s;
         cuts.push(e);
         for c in cuts {
-            while c - last > max {
-                last += max;
-                out.push((last, false));
+            let pieces = (c - last).div_ceil(max);
+            for q in 1..pieces {
+                out.push((last + (c - last) * q / pieces, false));
             }
             if c < e {
                 out.push((c, false));
@@ -393,6 +519,9 @@ impl Model {
     pub fn add_patches(&mut self, input: &Input<'_>, decoded: &[Vec<i32>], tol: f64) -> usize {
         let mut added = 0;
         let starts: Vec<u32> = self.segments.iter().map(|s| s.start).collect();
+        // New patches per segment, merged into the sorted lists at the end
+        // (inserting one by one costs the square of their number).
+        let mut new: Vec<Vec<(u32, usize, i32)>> = vec![Vec::new(); self.segments.len()];
         for (c, (orig, dec)) in input.values.iter().zip(decoded).enumerate() {
             for (f, (&o, &d)) in orig.iter().zip(dec).enumerate() {
                 let err = f64::from(o) - f64::from(d);
@@ -400,19 +529,39 @@ impl Model {
                     continue;
                 }
                 let s = starts.partition_point(|&st| st as usize <= f) - 1;
-                let seg = &mut self.segments[s];
-                let rel = f as u32 - seg.start;
+                let rel = f as u32 - self.segments[s].start;
                 let delta =
                     (i64::from(o) - i64::from(d)).clamp(i32::MIN.into(), i32::MAX.into()) as i32;
-                match seg
-                    .patches
-                    .binary_search_by_key(&(rel, c), |&(r, ch, _)| (r, ch))
-                {
-                    Ok(i) => seg.patches[i].2 = seg.patches[i].2.wrapping_add(delta),
-                    Err(i) => seg.patches.insert(i, (rel, c, delta)),
-                }
+                new[s].push((rel, c, delta));
                 added += 1;
             }
+        }
+        for (seg, mut new) in self.segments.iter_mut().zip(new) {
+            if new.is_empty() {
+                continue;
+            }
+            // Each (frame, channel) comes at most once per call.
+            new.sort_unstable_by_key(|&(r, c, _)| (r, c));
+            let old = std::mem::take(&mut seg.patches);
+            let mut merged = Vec::with_capacity(old.len() + new.len());
+            let (mut a, mut b) = (old.into_iter().peekable(), new.into_iter().peekable());
+            loop {
+                let next = match (a.peek(), b.peek()) {
+                    (Some(x), Some(y)) if (x.0, x.1) == (y.0, y.1) => {
+                        let (x, y) = (a.next(), b.next());
+                        x.zip(y).map(|(x, y)| (x.0, x.1, x.2.wrapping_add(y.2)))
+                    }
+                    (Some(x), Some(y)) if (x.0, x.1) < (y.0, y.1) => a.next(),
+                    (Some(_), Some(_)) => b.next(),
+                    (Some(_), None) => a.next(),
+                    (None, _) => b.next(),
+                };
+                match next {
+                    Some(p) => merged.push(p),
+                    None => break,
+                }
+            }
+            seg.patches = merged;
         }
         added
     }

@@ -67,8 +67,18 @@ pub fn jumps(y: &[f64], n: usize, ratio: f64, floor: f64) -> Vec<usize> {
         .collect()
 }
 
-/// PPCA cut points inside `[start, end)` of `y` (`len × n`).
-pub fn ppca_cuts(y: &[f64], n: usize, start: usize, end: usize, p: &Ppca) -> Vec<usize> {
+/// PPCA cut points inside `[start, end)` of `y` (`len × n`). A model
+/// window never grows past `max_len` frames: where it would without a cut,
+/// the segment is cut at the window's end (at the rise's peak if H was
+/// rising), so no segment is longer and each step's work is bounded.
+pub fn ppca_cuts(
+    y: &[f64],
+    n: usize,
+    start: usize,
+    end: usize,
+    p: &Ppca,
+    max_len: usize,
+) -> Vec<usize> {
     let mut cuts = Vec::new();
     let mut s = start;
     if n == 0 {
@@ -79,6 +89,12 @@ pub fn ppca_cuts(y: &[f64], n: usize, start: usize, end: usize, p: &Ppca) -> Vec
         let mut valley = f64::INFINITY;
         let mut rising: Option<(usize, f64)> = None;
         while s + k + p.t <= end {
+            if k > max_len && k > p.k0 {
+                let at = rising.map_or(s + k - p.delta, |(at, _)| at);
+                cuts.push(at);
+                s = at;
+                continue 'segments;
+            }
             let h = distance(y, n, s, s + k, s + k + p.t, p.tau);
             if let Some((at, peak)) = rising {
                 if h < peak {
@@ -184,8 +200,29 @@ mod tests {
                 }
             })
             .collect();
-        let cuts = ppca_cuts(&y, n, 0, 800, &Ppca::paper(120.0));
+        let cuts = ppca_cuts(&y, n, 0, 800, &Ppca::paper(120.0), usize::MAX);
         assert!(!cuts.is_empty(), "no cut");
         assert!(cuts.iter().any(|&c| (350..=450).contains(&c)), "{cuts:?}");
+    }
+
+    #[test]
+    fn ppca_window_is_bounded() {
+        // One behaviour throughout: no cut, unless the window is bounded.
+        let n = 2;
+        let y: Vec<f64> = (0..3000)
+            .flat_map(|f| {
+                let t = f as f64 * 0.05;
+                [t.sin() * 10.0, t.cos() * 5.0]
+            })
+            .collect();
+        let p = Ppca::paper(120.0);
+        assert!(ppca_cuts(&y, n, 0, 3000, &p, usize::MAX).is_empty());
+        let cuts = ppca_cuts(&y, n, 0, 3000, &p, 600);
+        assert!(!cuts.is_empty());
+        let mut last = 0;
+        for &c in cuts.iter().chain([3000].iter()) {
+            assert!(c - last <= 600 + p.t, "{cuts:?}");
+            last = c;
+        }
     }
 }
