@@ -586,8 +586,8 @@ fn forward_row<'a>(
 ) {
     for (c, o) in out.iter_mut().enumerate() {
         let mut s = b[c];
-        for d in 1..=3.min(i) {
-            s -= li[d] * prev(i - d)[c];
+        for (d, l) in li.iter().enumerate().take(3.min(i) + 1).skip(1) {
+            s -= l * prev(i - d)[c];
         }
         *o = s / li[0];
     }
@@ -596,11 +596,9 @@ fn forward_row<'a>(
 /// `L y = b` in place (`y` holds `b`), `k` right-hand sides.
 fn forward(l: &[[f64; 4]], y: &mut [f64], k: usize) {
     let mut out = vec![0.0; k];
-    for i in 0..l.len() {
+    for (i, li) in l.iter().enumerate() {
         let (done, rest) = y.split_at_mut(i * k);
-        forward_row(i, &l[i], &rest[..k], &mut out, |j| {
-            &done[j * k..(j + 1) * k]
-        });
+        forward_row(i, li, &rest[..k], &mut out, |j| &done[j * k..(j + 1) * k]);
         rest[..k].copy_from_slice(&out);
     }
 }
