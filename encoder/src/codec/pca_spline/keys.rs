@@ -586,8 +586,8 @@ fn forward_row<'a>(
 ) {
     for (c, o) in out.iter_mut().enumerate() {
         let mut s = b[c];
-        for (d, &ld) in li.iter().enumerate().take(3.min(i) + 1).skip(1) {
-            s -= ld * prev(i - d)[c];
+        for (d, l) in li.iter().enumerate().take(3.min(i) + 1).skip(1) {
+            s -= l * prev(i - d)[c];
         }
         *o = s / li[0];
     }
