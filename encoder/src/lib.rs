@@ -27,6 +27,7 @@ pub mod metrics;
 pub mod motion;
 pub mod play;
 pub mod rig;
+mod rotation;
 pub mod servo_clip;
 pub mod show;
 pub mod units;

@@ -76,29 +76,7 @@ pub enum LongError {
     BadFps(f64),
 }
 
-/// A row-major 3×3 matrix: `m[row][column]`.
-type M3 = [[f64; 3]; 3];
-
-fn mul(a: &M3, b: &M3) -> M3 {
-    let mut m = [[0.0; 3]; 3];
-    for (r, row) in m.iter_mut().enumerate() {
-        for (c, v) in row.iter_mut().enumerate() {
-            *v = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c];
-        }
-    }
-    m
-}
-
-/// The elementary rotation of `deg` degrees about `axis` (right-handed,
-/// column vectors: BVH's).
-fn rot(axis: usize, deg: f64) -> M3 {
-    let (s, c) = deg.to_radians().sin_cos();
-    match axis {
-        0 => [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]],
-        1 => [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]],
-        _ => [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
-    }
-}
+use crate::rotation::{mul, rot, M3};
 
 /// The angle about world Y of a rotation (its twist about Y), degrees.
 fn yaw(r: &M3) -> f64 {
