@@ -57,7 +57,7 @@ fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
         .iter()
         .map(|&i| cb.value(usize::from(i)) as i32)
         .collect();
-    let bits = x.len() as u64 * u64::from(cb.bits) + table_bits(&cb);
+    let bits = coded_bits(&cb, x.len() as u64);
     Some(Candidate {
         code: ChannelCode {
             key: cb,
@@ -100,10 +100,7 @@ fn fit_levels(points: &[i64], tol: i64, depth: usize) -> Option<Vec<Codebook>> {
         };
         let mut levels = vec![coarse];
         levels.extend(finer);
-        let bits: u64 = levels
-            .iter()
-            .map(|cb| points.len() as u64 * u64::from(cb.bits) + table_bits(cb))
-            .sum();
+        let bits = levels_bits(&levels, points.len() as u64);
         if best.as_ref().is_none_or(|(b, _)| bits < *b) {
             best = Some((bits, levels));
         }
@@ -140,10 +137,7 @@ fn absolute_levels(x: &[i64], tol: i64) -> Option<Candidate> {
         }
         decoded.push(out);
     }
-    let bits = levels
-        .iter()
-        .map(|cb| x.len() as u64 * u64::from(cb.bits) + table_bits(cb))
-        .sum();
+    let bits = levels_bits(&levels, x.len() as u64);
     let mut levels = levels.into_iter().zip(per_level);
     let (key, indices) = levels.next()?;
     Some(Candidate {
@@ -168,6 +162,16 @@ enum KeyCode {
 
 fn table_bits(cb: &Codebook) -> u64 {
     16 * cb.entries.len() as u64 + 8 * ENTRY_LEN as u64
+}
+
+/// Bits of `n` indices into `cb`, its table and its set entry.
+fn coded_bits(cb: &Codebook, n: u64) -> u64 {
+    n * u64::from(cb.bits) + table_bits(cb)
+}
+
+/// [`coded_bits`] of `n` values coded in `levels` (SPEC.md §4.5).
+fn levels_bits(levels: &[Codebook], n: u64) -> u64 {
+    levels.iter().map(|cb| coded_bits(cb, n)).sum()
 }
 
 /// Delta coding with key frames every `k`; tries delta codebooks of
@@ -279,15 +283,11 @@ fn closed_loop(
     }
     let nk = (0..x.len()).filter(|&f| is_key(f, k)).count() as u64;
     let nd = x.len() as u64 - nk;
-    let (key, levels) = match key_code {
-        KeyCode::Table(key_cb) => (key_cb.clone(), Vec::new()),
-        KeyCode::Levels(l) => (l[0].clone(), l[1..].to_vec()),
+    let (key, levels, key_bits) = match key_code {
+        KeyCode::Table(key_cb) => (key_cb.clone(), Vec::new(), coded_bits(key_cb, nk)),
+        KeyCode::Levels(l) => (l[0].clone(), l[1..].to_vec(), levels_bits(l, nk)),
     };
-    let key_bits: u64 = std::iter::once(&key)
-        .chain(&levels)
-        .map(|cb| nk * u64::from(cb.bits) + table_bits(cb))
-        .sum();
-    let bits = key_bits + nd * u64::from(cb.bits) + table_bits(cb);
+    let bits = key_bits + coded_bits(cb, nd);
     Some(Candidate {
         code: ChannelCode {
             key,
