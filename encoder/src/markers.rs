@@ -189,6 +189,15 @@ pub enum MarkerError {
     /// Encoding failed.
     #[error(transparent)]
     Encode(#[from] EncodeError),
+    /// The ARMS bound, proven over the filled motion, still fails over the
+    /// present samples after [`ARMS_RETRIES`] tighter encodes.
+    #[error("ARMS over the present samples is {got:.3} mm, over the bound's {want} mm, after {ARMS_RETRIES} tighter encodes")]
+    ArmsOverPresent {
+        /// The bound's ARMS, mm.
+        want: f64,
+        /// The last encode's ARMS over the present samples, mm.
+        got: f64,
+    },
 }
 
 /// Adds the mask to a coded clip as its last section (`0x81`, SPEC.md §3.7)
@@ -231,16 +240,49 @@ pub struct EncodedMarkers {
     pub error: MarkerMetrics,
 }
 
-/// Fills the missing samples ([`fill`]), encodes with [`encode::encode`] (the
-/// bound proven on every sample of the filled motion, so on every present
-/// one) and attaches the mask. `opts.metres_per_unit` is used as given (the
-/// clip's own unit: `clip.unit.metres()`).
+/// Fills the missing samples ([`fill`]), encodes with [`encode::encode`] and
+/// attaches the mask. The bound is proven on every sample of the filled
+/// motion, so its largest error holds on every present sample; an ARMS
+/// bound is then checked again over the present samples alone (a frame's
+/// filled markers no longer lower its RMS) and, where it does not hold
+/// there, the encode is repeated with the ARMS budget scaled down by the
+/// excess (at most [`ARMS_RETRIES`] times). `opts.metres_per_unit` is used
+/// as given (the clip's own unit: `clip.unit.metres()`).
 pub fn encode_markers(
     clip: &MarkerClip,
     opts: &EncodeOptions,
 ) -> Result<EncodedMarkers, MarkerError> {
     let filled = fill(&clip.motion, &clip.missing);
-    let mut enc = encode::encode(&filled, opts)?;
+    let mut o = opts.clone();
+    let mut tries = 0;
+    loop {
+        let enc = encode_filled(clip, &filled, &o)?;
+        let (Some(want), Some(budget)) = (opts.bound.arms_mm, o.bound.arms_mm) else {
+            return Ok(enc);
+        };
+        let got = enc.error.arms_mm;
+        if got <= want {
+            return Ok(enc);
+        }
+        if tries == ARMS_RETRIES {
+            return Err(MarkerError::ArmsOverPresent { want, got });
+        }
+        tries += 1;
+        o.bound.arms_mm = Some(budget * want / got * 0.98);
+    }
+}
+
+/// How often [`encode_markers`] tightens the ARMS budget before it gives up.
+pub const ARMS_RETRIES: usize = 4;
+
+/// One encode of the filled motion, its mask attached, measured over the
+/// present samples.
+fn encode_filled(
+    clip: &MarkerClip,
+    filled: &Motion,
+    opts: &EncodeOptions,
+) -> Result<EncodedMarkers, MarkerError> {
+    let mut enc = encode::encode(filled, opts)?;
     enc.bytes = attach_missing(&enc.bytes, &clip.missing)?;
     enc.metrics.bytes = enc.bytes.len();
     enc.metrics.ratio_f32 =
@@ -275,6 +317,11 @@ pub struct MarkerMetrics {
     pub max_frame: usize,
     /// RMS of the position errors, mm.
     pub rms_mm: f64,
+    /// ARMS over the present samples, mm: the mean over the frames with a
+    /// present marker of the RMS of that frame's present markers' errors
+    /// (the ARMS of a skeleton clip, [`metrics::Metrics::arms_mm`], with
+    /// the missing samples left out).
+    pub arms_mm: f64,
     /// Mean position error, mm.
     pub mean_mm: f64,
 }
@@ -294,7 +341,9 @@ pub fn marker_errors(
     let frames = original.frames().min(decoded.frames());
     let (mut n, mut sum, mut sq, mut max, mut at) = (0usize, 0.0, 0.0, 0.0f64, (0, 0));
     let mut missing = 0;
+    let (mut arms_sum, mut arms_frames) = (0.0, 0usize);
     for f in 0..frames {
+        let (mut frame_n, mut frame_sq) = (0usize, 0.0);
         for j in 0..original.skeleton.joints.len() {
             if mask.is_missing(f, j) {
                 missing += 1;
@@ -305,10 +354,16 @@ pub fn marker_errors(
             n += 1;
             sum += d;
             sq += d * d;
+            frame_n += 1;
+            frame_sq += d * d;
             if d > max {
                 max = d;
                 at = (f, j);
             }
+        }
+        if frame_n > 0 {
+            arms_sum += (frame_sq / frame_n as f64).sqrt();
+            arms_frames += 1;
         }
     }
     MarkerMetrics {
@@ -323,6 +378,7 @@ pub fn marker_errors(
             .unwrap_or_default(),
         max_frame: at.0,
         rms_mm: (sq / n.max(1) as f64).sqrt(),
+        arms_mm: arms_sum / arms_frames.max(1) as f64,
         mean_mm: sum / n.max(1) as f64,
     }
 }

@@ -56,6 +56,31 @@ pub fn corpus_files_ext(folder: &str, ext: &str) -> Option<Vec<PathBuf>> {
     Some(files)
 }
 
+/// Every file under the corpus (all folders, recursively; README files and
+/// other non-data files included: the caller picks by extension), sorted,
+/// or `None` with the visible skip of [`corpus_files`].
+pub fn corpus_tree() -> Option<Vec<PathBuf>> {
+    let dir = corpus_dir();
+    if !dir.is_dir() {
+        // The same skip (or CI failure) as a missing folder.
+        corpus_folder(".")?;
+    }
+    let mut files = Vec::new();
+    let mut todo = vec![dir];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())) {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                todo.push(p);
+            } else {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    Some(files)
+}
+
 /// The corpus file `folder/name`: for a `.bvh` name, the folder's first
 /// `.bvh` file if it is not there; any other file (`asf-amc/16.asf`) must be
 /// there by its name. `None`, with the visible skip of [`corpus_files`],

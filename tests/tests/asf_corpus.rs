@@ -1,13 +1,12 @@
 //! The ASF/AMC reader on CMU's native files (corpus `asf-amc/`): forward
-//! kinematics against another converter's BVH of the same take, and encode
-//! → decode round trips with every codec.
+//! kinematics against another converter's BVH of the same take, and how
+//! the conversion bakes CMU's skeleton. The round trips with every codec at
+//! every bound are corpus_roundtrip.rs's (every motion file of the corpus).
 
-use mocap_decoder::Clip;
 use mocap_encoder::asf::{self, AmcOptions};
-use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::motion::Motion;
 use mocap_encoder::units::LengthUnit;
-use mocap_encoder::{bvh, clipfile, fixed, kinematics, metrics};
+use mocap_encoder::{bvh, kinematics};
 use mocap_tests::corpus_file;
 
 fn read(asf_name: &str, amc_name: &str) -> Option<asf::AsfMotion> {
@@ -108,75 +107,7 @@ fn fk_matches_the_other_converter() {
     assert!(all_mean < 2.0, "all frames mean {all_mean} mm");
 }
 
-/// Encodes `amc` (with its `asf`) with `codec` at `bound`, decodes it with
-/// the `no_std` decoder and checks the bound independently.
-fn roundtrip(asf_name: &str, amc_name: &str, codec: CodecChoice, bound: &str) {
-    let Some(r) = read(asf_name, amc_name) else {
-        return;
-    };
-    let m = &r.motion;
-    let unit = r.declared_unit().unwrap();
-    let specs: Vec<BoundSpec> = bound.split('+').map(|s| s.parse().unwrap()).collect();
-    let b = Bound::from_specs(&specs);
-    let opts = EncodeOptions {
-        codec,
-        bound: b,
-        metres_per_unit: unit.metres(),
-        key_interval: None,
-    };
-    let enc = encode::encode(m, &opts).unwrap_or_else(|e| panic!("{amc_name}: {e}"));
-    let clip = Clip::parse(&enc.bytes).unwrap();
-    let frames = clipfile::decode_all(&clip).unwrap();
-    let back = fixed::from_fixed(&m.skeleton, m.frame_time, &frames, unit.metres());
-    let x = metrics::compare(m, &back, unit.metres(), None, enc.bytes.len(), 0);
-    assert_eq!(x, enc.metrics, "{amc_name}: encoder's own metrics differ");
-    assert!(b.holds(&x), "{amc_name} at {bound}: {x:?}");
-    for spec in &specs {
-        match *spec {
-            BoundSpec::Degrees(d) => assert!(x.angle_max_deg <= d),
-            BoundSpec::Millimetres(mm) => assert!(x.max_joint_err_mm <= mm),
-            BoundSpec::Arms(mm) => assert!(x.arms_mm <= mm),
-        }
-    }
-    // The clip plays against its source: same joints and channels.
-    clipfile::decode_against(&clip, m, unit.metres()).unwrap();
-    eprintln!(
-        "{amc_name} {codec:?} @ {bound}: {} frames × {} channels, {} bytes, ratio {:.2}, angle max {:.3}°, joint max {:.2} mm, ARMS {:.2} mm",
-        m.frames(),
-        m.channels(),
-        enc.bytes.len(),
-        x.ratio_f32,
-        x.angle_max_deg,
-        x.max_joint_err_mm,
-        x.arms_mm
-    );
-}
-
 const TAKES: [(&str, &str); 2] = [("16.asf", "16_15.amc"), ("13.asf", "13_39.amc")];
-
-#[test]
-fn index_roundtrips() {
-    for (a, m) in TAKES {
-        roundtrip(a, m, CodecChoice::Index, "1deg");
-        roundtrip(a, m, CodecChoice::Index, "50mm+arms:10mm");
-    }
-}
-
-#[test]
-fn pca_spline_roundtrips() {
-    for (a, m) in TAKES {
-        roundtrip(a, m, CodecChoice::PcaSpline, "1deg");
-        roundtrip(a, m, CodecChoice::PcaSpline, "50mm+arms:10mm");
-    }
-}
-
-#[test]
-fn predictive_roundtrips() {
-    for (a, m) in TAKES {
-        roundtrip(a, m, CodecChoice::Predictive, "1deg");
-        roundtrip(a, m, CodecChoice::Predictive, "50mm+arms:10mm");
-    }
-}
 
 /// The conversion's channels on CMU's skeleton, and how far its baked
 /// Euler angles stay from gimbal lock; 13_39 (LF) reads like 16_15 (CRLF).

@@ -54,13 +54,16 @@ fn c3d_corpus_roundtrip() {
             CodecChoice::PcaSpline,
             CodecChoice::Predictive,
         ] {
-            for mm in [5.0, 20.0] {
+            // 5 mm (the bench's tight marker bound), 20 mm and 50 mm + ARMS
+            // 10 mm; the angle bound (1°) does not apply to a marker clip
+            // (no rotation channel: the CLI refuses it with a message).
+            for (mm, arms) in [(5.0, None), (20.0, None), (50.0, Some(10.0))] {
                 let opts = EncodeOptions {
                     codec,
                     bound: Bound {
                         angle_deg: None,
                         position_mm: Some(mm),
-                        arms_mm: None,
+                        arms_mm: arms,
                     },
                     metres_per_unit: mpu,
                     key_interval: None,
@@ -75,19 +78,23 @@ fn c3d_corpus_roundtrip() {
                 let x = markers::marker_errors(&clip.motion, &back, &clip.missing, mpu);
                 assert_eq!(x, enc.error);
                 assert!(x.max_mm <= mm, "{name} {codec:?} at {mm} mm: {x:?}");
+                if let Some(a) = arms {
+                    assert!(x.arms_mm <= a, "{name} {codec:?} ARMS {a} mm: {x:?}");
+                }
                 assert_eq!(x.missing, clip.missing.count());
                 let decoded_mask = MissingMask::of_clip(&parsed).unwrap_or_else(|| {
                     MissingMask::none(clip.missing.frames, clip.missing.markers)
                 });
                 assert_eq!(decoded_mask, clip.missing, "{name}: the clip's mask");
                 eprintln!(
-                    "{name} {} @ {mm} mm: {} bytes (ratio {:.1}:1 vs f32), marker error max {:.2} mm ({} at frame {}), RMS {:.2} mm over {} present samples, {} missing in {} runs",
+                    "{name} {} @ {mm} mm, ARMS {arms:?} mm: {} bytes (ratio {:.1}:1 vs f32), marker error max {:.2} mm ({} at frame {}), ARMS {:.2} mm, RMS {:.2} mm over {} present samples, {} missing in {} runs",
                     codec.name(),
                     bytes.len(),
                     enc.encoded.metrics.ratio_f32,
                     x.max_mm,
                     x.max_marker,
                     x.max_frame,
+                    x.arms_mm,
                     x.rms_mm,
                     x.present,
                     x.missing,

@@ -85,12 +85,13 @@ pub fn encode(
     let enc = markers::encode_markers(&clip, &opts)?;
     let x = &enc.error;
     println!(
-        "{} bytes, ratio {:.2}:1 vs f32, marker error max {:.2} mm ({} at frame {}), RMS {:.2} mm over {} present samples; {} missing samples flagged (bound {bound} holds; {})",
+        "{} bytes, ratio {:.2}:1 vs f32, marker error max {:.2} mm ({} at frame {}), ARMS {:.2} mm, RMS {:.2} mm over {} present samples; {} missing samples flagged (bound {bound} holds on the present samples; {})",
         enc.encoded.bytes.len(),
         enc.encoded.metrics.ratio_f32,
         x.max_mm,
         x.max_marker,
         x.max_frame,
+        x.arms_mm,
         x.rms_mm,
         x.present,
         x.missing,
@@ -143,6 +144,7 @@ pub fn eval(input: &Path, clip_path: &Path, units: &UnitArg, json: bool) -> supe
         "marker error RMS    {:.3} mm (mean {:.3} mm)",
         x.rms_mm, x.mean_mm
     );
+    println!("marker error ARMS   {:.3} mm", x.arms_mm);
     println!("present samples     {}", x.present);
     println!(
         "missing samples     {} ({:.1} %) in {} runs: {}",
