@@ -13,10 +13,12 @@
 #     (issue 15)"): our codecs beside raw 16-bit frames, quantisation + zstd / xz and
 #     keyframe-linear reduction, per-folder totals, on cmu, cmu-long, iclone-cmu and the
 #     asf-amc .amc files at 1°, 20 mm and 50 mm + ARMS 10 mm, and the C3D marker files at
-#     5 mm and 20 mm (the picture: target/bench/baselines.png).
+#     5 mm, 20 mm and 50 mm + ARMS 10 mm (the picture: target/bench/baselines.png).
 #  6. the readers' throughput and a folder of 500 files (encoder/examples/read_folder.rs).
 #   bash scripts/bench.sh [CLIP.bvh]   (default: $MOCAP_CORPUS/cmu/35_01.bvh)
 #   bash scripts/bench.sh --baselines  (part 5 alone: no QEMU, no cross toolchain)
+#   bash scripts/bench.sh --baselines --write  (the same, and its tables and picture written
+#     into BENCHMARKS.md §1d between its `<!-- bench:... -->` markers and docs/bench_baselines.png)
 #   Failing steps print why (their output is in target/bench/steps.log).
 set -euo pipefail
 # shellcheck source=scripts/toolchain.sh
@@ -35,22 +37,45 @@ baselines_part() {
     /usr/bin/time -f "wall time: %e s" -o "$out/baselines.time" \
         "$mocap" bench "$corpus/cmu" "$corpus/cmu-long" "$corpus/iclone-cmu" "$corpus"/asf-amc/*.amc \
         "${codecs[@]}" --max-error 1deg --max-error 20mm --max-error 50mm+arms:10mm --summary \
-        --json "$out/baselines.json" --plot "$out/baselines.png" 2>"$out/baselines.log"
+        --json "$out/baselines.json" --plot "$out/baselines.png" 2>"$out/baselines.log" |
+        tee "$out/baselines.md"
     cat "$out/baselines.time"
     echo
-    echo "mocap bench $corpus/c3d ${codecs[*]} --max-error 5mm --max-error 20mm --summary"
+    echo "mocap bench $corpus/c3d ${codecs[*]} --max-error 5mm --max-error 20mm --max-error 50mm+arms:10mm --summary"
     echo
     /usr/bin/time -f "wall time: %e s" -o "$out/baselines-c3d.time" \
-        "$mocap" bench "$corpus/c3d" "${codecs[@]}" --max-error 5mm --max-error 20mm --summary \
-        --json "$out/baselines-c3d.json" 2>"$out/baselines-c3d.log"
+        "$mocap" bench "$corpus/c3d" "${codecs[@]}" --max-error 5mm --max-error 20mm \
+        --max-error 50mm+arms:10mm --summary \
+        --json "$out/baselines-c3d.json" 2>"$out/baselines-c3d.log" | tee "$out/baselines-c3d.md"
     cat "$out/baselines-c3d.time"
     echo
+}
+
+# Replaces the lines between `<!-- bench:NAME -->` and `<!-- /bench:NAME -->` of BENCHMARKS.md
+# with the file FILE.
+splice_benchmarks() {
+    local name=$1 file=$2
+    grep -q "^<!-- bench:$name -->\$" BENCHMARKS.md && grep -q "^<!-- /bench:$name -->\$" BENCHMARKS.md || {
+        echo "bench.sh: BENCHMARKS.md has no <!-- bench:$name --> ... <!-- /bench:$name --> block" >&2
+        return 1
+    }
+    awk -v begin="<!-- bench:$name -->" -v end="<!-- /bench:$name -->" -v file="$file" '
+        $0 == begin { print; while ((getline line < file) > 0) print line; skip = 1; next }
+        $0 == end { skip = 0 }
+        !skip { print }' BENCHMARKS.md >BENCHMARKS.md.new
+    mv BENCHMARKS.md.new BENCHMARKS.md
 }
 
 if [ "${1:-}" = --baselines ]; then
     cargo build --release -q -p mocap-cli
     mkdir -p target/bench
     baselines_part "${CARGO_TARGET_DIR:-target}/release/mocap" target/bench
+    if [ "${2:-}" = --write ]; then
+        splice_benchmarks baselines target/bench/baselines.md
+        splice_benchmarks baselines-c3d target/bench/baselines-c3d.md
+        cp target/bench/baselines.png docs/bench_baselines.png
+        echo "wrote BENCHMARKS.md §1d's tables and docs/bench_baselines.png"
+    fi
     exit 0
 fi
 
