@@ -89,25 +89,33 @@ pub fn from_fixed(
     metres_per_unit: f64,
 ) -> Motion {
     let kinds = skeleton.channel_kinds();
-    let n = kinds.len().max(1);
-    let values = frames
-        .iter()
-        .enumerate()
-        .map(|(i, &v)| {
-            let kind = kinds[i % n];
-            let x = f64::from(v) / scale(kind, metres_per_unit);
-            if kind.is_rotation() {
-                wrap_degrees(x)
-            } else {
-                x
-            }
-        })
-        .collect();
+    let mut values = Vec::with_capacity(frames.len());
+    for frame in frames.chunks(kinds.len().max(1)) {
+        extend_from_fixed(&kinds, frame, metres_per_unit, &mut values);
+    }
     Motion {
         skeleton: skeleton.clone(),
         frame_time,
         values,
     }
+}
+
+/// One frame of [`from_fixed`]: appends the source-unit values of the
+/// fixed-point `frame` (channel kinds `kinds`) to `out`.
+pub fn extend_from_fixed(
+    kinds: &[ChannelKind],
+    frame: &[i32],
+    metres_per_unit: f64,
+    out: &mut Vec<f64>,
+) {
+    out.extend(frame.iter().zip(kinds).map(|(&v, &kind)| {
+        let x = f64::from(v) / scale(kind, metres_per_unit);
+        if kind.is_rotation() {
+            wrap_degrees(x)
+        } else {
+            x
+        }
+    }));
 }
 
 #[cfg(test)]

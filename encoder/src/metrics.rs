@@ -42,7 +42,7 @@ pub struct Metrics {
 /// Positions of every joint for every frame, in millimetres.
 pub fn positions_mm(m: &Motion, metres_per_unit: f64) -> Vec<[f64; 3]> {
     let mm = metres_per_unit * 1000.0;
-    let mut all = Vec::new();
+    let mut all = Vec::with_capacity(m.frames() * m.skeleton.joints.len());
     let mut one = Vec::new();
     for f in 0..m.frames() {
         kinematics::joint_positions(&m.skeleton, m.frame(f), &mut one);
@@ -61,7 +61,39 @@ pub fn compare(
     bytes: usize,
     input_bytes: usize,
 ) -> Metrics {
-    let frames = original.frames().min(decoded.frames());
+    compare_frames(
+        original,
+        &decoded.skeleton,
+        decoded.frames(),
+        |f, out| {
+            out.clear();
+            out.extend_from_slice(decoded.frame(f));
+        },
+        metres_per_unit,
+        original_positions,
+        bytes,
+        input_bytes,
+    )
+}
+
+/// [`compare`] with the decoded motion given a frame at a time:
+/// `decoded_frame(f, out)` fills `out` with frame `f`'s channel values (of
+/// the skeleton `decoded_skeleton`, the original's or one with its channel
+/// layout), for `f < decoded_frames`. Nothing as long as
+/// the clip is held besides the original's positions, so the proof of a
+/// long take needs no decoded copy of it in floating point.
+#[allow(clippy::too_many_arguments)] // compare's arguments and the frame source
+pub fn compare_frames(
+    original: &Motion,
+    decoded_skeleton: &crate::motion::Skeleton,
+    decoded_frames: usize,
+    mut decoded_frame: impl FnMut(usize, &mut Vec<f64>),
+    metres_per_unit: f64,
+    original_positions: Option<&[[f64; 3]]>,
+    bytes: usize,
+    input_bytes: usize,
+) -> Metrics {
+    let frames = original.frames().min(decoded_frames);
     let channels = original.channels();
     let own;
     let a = match original_positions {
@@ -71,17 +103,24 @@ pub fn compare(
             &own
         }
     };
-    let b = positions_mm(decoded, metres_per_unit);
     let joints = original.skeleton.joints.len().max(1);
+    let mm = metres_per_unit * 1000.0;
+    let kinds = original.skeleton.channel_kinds();
 
     let mut arms_sum = 0.0;
     let mut max_err = 0.0f64;
     let mut max_at = (0usize, 0usize);
     let mut err_sq = 0.0;
+    let (mut ang_sq, mut ang_n, mut ang_max, mut pos_max) = (0.0, 0usize, 0.0f64, 0.0f64);
+    // The decoded frame and its positions one frame at a time (as
+    // positions_mm computes them), not arrays as long as the clip.
+    let (mut y, mut b) = (Vec::with_capacity(channels), Vec::with_capacity(joints));
     for f in 0..frames {
+        decoded_frame(f, &mut y);
+        kinematics::joint_positions(decoded_skeleton, &y, &mut b);
         let mut frame_sq = 0.0;
         for j in 0..joints {
-            let (p, q) = (a[f * joints + j], b[f * joints + j]);
+            let (p, q) = (a[f * joints + j], b[j].map(|v| v * mm));
             let d2: f64 = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum();
             frame_sq += d2;
             if d2.sqrt() > max_err {
@@ -91,6 +130,17 @@ pub fn compare(
         }
         err_sq += frame_sq;
         arms_sum += (frame_sq / joints as f64).sqrt();
+        let x = original.frame(f);
+        for (c, kind) in kinds.iter().enumerate() {
+            if kind.is_rotation() {
+                let d = wrap_degrees(y[c] - x[c]).abs();
+                ang_sq += d * d;
+                ang_n += 1;
+                ang_max = ang_max.max(d);
+            } else {
+                pos_max = pos_max.max((y[c] - x[c]).abs() * metres_per_unit * 1000.0);
+            }
+        }
     }
     // ‖A − E(A)‖ with E(A) the per-coordinate mean over frames.
     let mut spread = 0.0;
@@ -105,21 +155,6 @@ pub fn compare(
         }
     }
 
-    let kinds = original.skeleton.channel_kinds();
-    let (mut ang_sq, mut ang_n, mut ang_max, mut pos_max) = (0.0, 0usize, 0.0f64, 0.0f64);
-    for f in 0..frames {
-        let (x, y) = (original.frame(f), decoded.frame(f));
-        for (c, kind) in kinds.iter().enumerate() {
-            if kind.is_rotation() {
-                let d = wrap_degrees(y[c] - x[c]).abs();
-                ang_sq += d * d;
-                ang_n += 1;
-                ang_max = ang_max.max(d);
-            } else {
-                pos_max = pos_max.max((y[c] - x[c]).abs() * metres_per_unit * 1000.0);
-            }
-        }
-    }
     let raw = frames * channels * 4;
     Metrics {
         bytes,

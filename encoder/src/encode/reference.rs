@@ -70,10 +70,19 @@ impl Reference {
     /// reference was made from: the metrics a bound is checked on. `bytes`
     /// is the size the ratios are computed with.
     pub fn measure(&self, m: &Motion, frames: &[i32], bytes: usize) -> Metrics {
-        let back = fixed::from_fixed(&m.skeleton, m.frame_time, frames, self.metres_per_unit);
-        metrics::compare(
+        // A frame at a time (fixed::from_fixed's arithmetic): no decoded
+        // copy of the clip in floating point.
+        let kinds = m.skeleton.channel_kinds();
+        let width = kinds.len().max(1);
+        metrics::compare_frames(
             m,
-            &back,
+            &m.skeleton,
+            frames.len() / width,
+            |f, out| {
+                out.clear();
+                let frame = frames.get(f * width..(f + 1) * width).unwrap_or(&[]);
+                fixed::extend_from_fixed(&kinds, frame, self.metres_per_unit, out);
+            },
             self.metres_per_unit,
             Some(&self.original_mm),
             bytes,
