@@ -7,6 +7,7 @@ pub mod index;
 pub mod pca_spline;
 pub mod predictive;
 pub mod quantizer;
+pub mod rma;
 
 use std::str::FromStr;
 
