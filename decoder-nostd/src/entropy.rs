@@ -37,14 +37,13 @@ pub const MAX_RAW_BITS: u32 = 16;
 pub struct Table<'a> {
     /// `n`: `M = 2^n`.
     precision: u32,
-    /// Width of each stored count, `0 ≤ w ≤ 15`.
-    width: u32,
     /// Alphabet size `A ≥ 1`.
     alphabet: u32,
-    /// Symbol 0's count: `M` minus the stored counts.
+    /// Symbol 0's count.
     count0: u32,
-    /// The counts of symbols `1 … A − 1`, `w` bits each, LSB first.
-    counts: &'a [u8],
+    /// The scan of the counts right after symbol 0's (the hot loop starts
+    /// here when the slot is past symbol 0).
+    after0: Scan<'a>,
 }
 
 fn malformed(rule: &'static str) -> Error {
@@ -59,37 +58,54 @@ impl<'a> Table<'a> {
         let head = r.u8().ok_or(malformed("table ends early"))?;
         let precision = u32::from(head & 0x0f);
         let width = u32::from(head >> 4);
-        let last = r
+        let alphabet = r
             .varint_u32()
             .ok_or(malformed("table ends early or bad varint"))?;
-        if last >= MAX_ALPHABET {
+        if alphabet == 0 {
+            return Err(malformed("alphabet of 0 symbols"));
+        }
+        if alphabet > MAX_ALPHABET {
             return Err(malformed("alphabet above 65536 symbols"));
         }
-        // `last ≤ 65535`, `width ≤ 15`: no overflow.
-        let bits = last.wrapping_mul(width);
-        let len = bits.wrapping_add(7) >> 3;
-        let counts = r.take(len as usize).ok_or(malformed("table ends early"))?;
+        let counts = r.rest();
         let m = 1u32 << precision;
-        let mut sum = 0u32;
-        let mut scan = CountScan::new(counts, width);
-        for _ in 0..last {
-            // Each count < 2^15, at most 65535 of them: the sum fits.
-            sum = sum.wrapping_add(scan.next());
+        let mut scan = Scan::new(counts, width, m);
+        let mut count0 = m;
+        let mut after0 = scan;
+        // Symbols 0 … A − 2 are stored; the last one has what is left.
+        for s in 0..alphabet.wrapping_sub(1) {
+            let left = scan.rem;
+            let f = scan.next();
+            if f > left {
+                return Err(malformed("a count is above what is left of M"));
+            }
+            if s == 0 {
+                count0 = f;
+                after0 = scan;
+            }
         }
-        if sum > m {
-            return Err(malformed("counts add up to more than M"));
+        if scan.short {
+            return Err(malformed("table ends early"));
         }
         if scan.acc != 0 {
             return Err(malformed("padding bits of the counts are not zero"));
         }
+        let used = counts.len().wrapping_sub(scan.bytes.len());
+        let after0 = Scan {
+            // The hot loop never reads past the table's bytes.
+            bytes: after0
+                .bytes
+                .get(..after0.bytes.len().wrapping_sub(scan.bytes.len()))
+                .unwrap_or(&[]),
+            ..after0
+        };
         let table = Table {
             precision,
-            width,
-            alphabet: last.wrapping_add(1),
-            count0: m.wrapping_sub(sum),
-            counts,
+            alphabet,
+            count0,
+            after0,
         };
-        Ok((table, r.pos()))
+        Ok((table, r.pos().wrapping_sub(counts.len()).wrapping_add(used)))
     }
 
     /// `n` (`M = 2^n`).
@@ -105,33 +121,35 @@ impl<'a> Table<'a> {
     /// Symbol `s`'s normalised count (0 past the alphabet); a scan, not for
     /// hot loops.
     pub fn count(&self, s: u32) -> u32 {
+        if s >= self.alphabet {
+            return 0;
+        }
         if s == 0 {
             return self.count0;
         }
-        let mut scan = CountScan::new(self.counts, self.width);
-        let mut f = 0;
-        for _ in 1..=s.min(self.alphabet) {
-            f = scan.next();
+        let mut scan = self.after0;
+        for _ in 1..s {
+            scan.next();
         }
-        if s < self.alphabet {
-            f
+        if s == self.alphabet.wrapping_sub(1) {
+            scan.rem
         } else {
-            0
+            scan.next()
         }
     }
 
     /// The symbol whose interval `[cum, cum + f)` holds `slot < M`, with
-    /// `cum` and `f`. On a validated table it always exists; anything else
-    /// (never on a validated table) gives the last symbol, garbage but safe.
+    /// `cum` and `f` (always found on a validated table).
     #[inline(always)]
     fn find(&self, slot: u32) -> (u32, u32, u32) {
         if slot < self.count0 {
             return (0, 0, self.count0);
         }
         let mut cum = self.count0;
-        let mut scan = CountScan::new(self.counts, self.width);
+        let mut scan = self.after0;
+        let last = self.alphabet.wrapping_sub(1);
         let mut s = 1;
-        while s < self.alphabet {
+        while s < last {
             let f = scan.next();
             let next = cum.wrapping_add(f);
             if slot < next {
@@ -140,43 +158,74 @@ impl<'a> Table<'a> {
             cum = next;
             s = s.wrapping_add(1);
         }
-        (self.alphabet.wrapping_sub(1), cum, 1)
+        (last, cum, scan.rem)
     }
 }
 
-/// Sequential `w`-bit fields, LSB first (§4.4's order), zeros past the end.
-struct CountScan<'a> {
-    bytes: core::slice::Iter<'a, u8>,
+/// The stored counts read in order (§10.2): each field is
+/// `min(W, bits(rem))` bits wide, LSB first (§4.4's order), `rem` being what
+/// is left of `M`; zeros past the end (`short` then says so).
+#[derive(Clone, Copy, Debug)]
+struct Scan<'a> {
+    bytes: &'a [u8],
     acc: u32,
     avail: u32,
+    /// `M` minus the counts read.
+    rem: u32,
+    /// The next field's width.
     width: u32,
-    mask: u32,
+    short: bool,
 }
 
-impl<'a> CountScan<'a> {
-    #[inline(always)]
-    fn new(bytes: &'a [u8], width: u32) -> Self {
-        let width = width & 15;
-        CountScan {
-            bytes: bytes.iter(),
+impl<'a> Scan<'a> {
+    fn new(bytes: &'a [u8], width: u32, m: u32) -> Self {
+        let mut scan = Scan {
+            bytes,
             acc: 0,
             avail: 0,
-            width,
-            mask: (1u32 << width).wrapping_sub(1),
+            rem: m,
+            width: width & 15,
+            short: false,
+        };
+        scan.narrow();
+        scan
+    }
+
+    /// `width = min(width, bits(rem))`: `rem` only shrinks, so the width
+    /// only narrows, at most 15 times over a whole scan.
+    #[inline(always)]
+    fn narrow(&mut self) {
+        while self.rem < (1u32 << self.width) >> 1 {
+            self.width = self.width.wrapping_sub(1);
         }
     }
 
+    /// The next count (`rem` takes it off, wrapping: a validated table
+    /// never goes below 0).
     #[inline(always)]
     fn next(&mut self) -> u32 {
-        // `width ≤ 15`: at most two bytes, `avail ≤ 22`.
+        // `width ≤ 15`: at most two bytes, `avail ≤ 30`.
         while self.avail < self.width {
-            let b = u32::from(self.bytes.next().copied().unwrap_or(0));
-            self.acc |= b << self.avail;
+            let b = match *self.bytes {
+                [b, ref rest @ ..] => {
+                    self.bytes = rest;
+                    b
+                }
+                [] => {
+                    self.short = true;
+                    // Past 8 · 2 bytes: stop pulling zeros.
+                    self.avail = self.width;
+                    break;
+                }
+            };
+            self.acc |= u32::from(b) << self.avail;
             self.avail = self.avail.wrapping_add(8);
         }
-        let v = self.acc & self.mask;
+        let v = self.acc & ((1u32 << self.width).wrapping_sub(1));
         self.acc >>= self.width;
         self.avail = self.avail.wrapping_sub(self.width);
+        self.rem = self.rem.wrapping_sub(v);
+        self.narrow();
         v
     }
 }
@@ -297,8 +346,8 @@ mod tests {
     use super::*;
     use std::vec::Vec;
 
-    /// n = 2 (M = 4), w = 2, A = 3: counts 2 (implicit), 1, 1.
-    const TABLE: [u8; 3] = [0x22, 0x02, 0b0101];
+    /// n = 2 (M = 4), W = 2, A = 3: counts 2 (2 bits), 1 (2 bits: 2 left), 1 (what is left).
+    const TABLE: [u8; 3] = [0x22, 0x03, 0b0110];
 
     #[test]
     fn parses_a_small_table() {
@@ -320,29 +369,37 @@ mod tests {
         let err = |b: &[u8]| Table::parse(b).unwrap_err();
         assert!(matches!(err(&[]), Error::EntropyTable { .. }));
         assert!(matches!(err(&[0x22]), Error::EntropyTable { .. }));
-        assert!(matches!(err(&[0x22, 0x02]), Error::EntropyTable { .. }));
-        // Counts 3 + 3 > M = 4.
+        assert!(matches!(err(&[0x22, 0x03]), Error::EntropyTable { .. }));
+        // W = 3: symbol 0's count 5 > M = 4.
         assert!(matches!(
-            err(&[0x22, 0x02, 0b1111]),
+            err(&[0x32, 0x03, 0b101]),
             Error::EntropyTable { .. }
         ));
         // Padding bits set.
         assert!(matches!(
-            err(&[0x22, 0x02, 0b1_0101]),
+            err(&[0x22, 0x03, 0b1_0110]),
             Error::EntropyTable { .. }
         ));
-        // Alphabet 65 537.
+        // Alphabet 65 537 (65 536 is fine), alphabet 0.
         assert!(matches!(
-            err(&[0x00, 0x80, 0x80, 0x04]),
+            err(&[0x00, 0x81, 0x80, 0x04]),
             Error::EntropyTable { .. }
         ));
+        assert_eq!(
+            Table::parse(&[0x00, 0x80, 0x80, 0x04])
+                .unwrap()
+                .0
+                .alphabet(),
+            65_536
+        );
+        assert!(matches!(err(&[0x00, 0x00]), Error::EntropyTable { .. }));
         // Unterminated varint.
         assert!(matches!(err(&[0x00, 0x80]), Error::EntropyTable { .. }));
     }
 
     #[test]
     fn one_symbol_table_decodes_without_bytes() {
-        let (t, used) = Table::parse(&[0x00, 0x00]).unwrap();
+        let (t, used) = Table::parse(&[0x00, 0x01]).unwrap();
         assert_eq!(used, 2);
         let stream = STATE_LOW.to_le_bytes();
         let mut d = Decoder::new(t, &stream).unwrap();

@@ -152,13 +152,13 @@ impl Model {
     }
 
     /// A table from its counts (they must add up to `2^n`, at most 65 536
-    /// of them, those past symbol 0 below `2^15`).
+    /// of them, all but the last below `2^15`).
     pub fn from_counts(n: u32, counts: Vec<u32>) -> Option<Model> {
         if n > MAX_PRECISION
             || counts.is_empty()
             || counts.len() > MAX_ALPHABET as usize
             || counts.iter().map(|&c| u64::from(c)).sum::<u64>() != 1u64 << n
-            || counts.iter().skip(1).any(|&c| c >= 1 << 15)
+            || counts[..counts.len() - 1].iter().any(|&c| c >= 1 << 15)
         {
             return None;
         }
@@ -187,17 +187,18 @@ impl Model {
         &self.counts
     }
 
-    /// `w`: the bits of the largest stored count (symbols `1 … A − 1`).
+    /// `W`: the bits of the largest stored count (symbols `0 … A − 2`).
     pub fn width(&self) -> u32 {
-        let max = self.counts.iter().skip(1).copied().max().unwrap_or(0);
+        let stored = &self.counts[..self.counts.len() - 1];
+        let max = stored.iter().copied().max().unwrap_or(0);
         32 - max.leading_zeros()
     }
 
     /// The table's bytes (SPEC.md §10.2).
     pub fn table_bytes(&self) -> Vec<u8> {
-        let w = self.width();
-        let mut out = vec![(self.precision | (w << 4)) as u8];
-        let mut v = (self.counts.len() - 1) as u32;
+        let big_w = self.width();
+        let mut out = vec![(self.precision | (big_w << 4)) as u8];
+        let mut v = self.counts.len() as u32;
         // postcard's varint (§3.1).
         while v >= 0x80 {
             out.push((v as u8) | 0x80);
@@ -205,8 +206,11 @@ impl Model {
         }
         out.push(v as u8);
         let mut bits = crate::codec::bits::BitWriter::default();
-        for &c in &self.counts[1..] {
+        let mut rem = 1u32 << self.precision;
+        for &c in &self.counts[..self.counts.len() - 1] {
+            let w = big_w.min(32 - rem.leading_zeros());
             bits.write(c, w as u8);
+            rem -= c;
         }
         out.extend(bits.finish());
         out
