@@ -335,7 +335,9 @@ impl<'a, 't> Decoder<'a, 't> {
     }
 
     /// Whether the stream ended exactly where the encoder started: every
-    /// byte read and the state back at `2^23` (SPEC.md §10.5).
+    /// byte read and the state back at `2^23` (SPEC.md §10.5). A sanity
+    /// check, not an integrity check (the container's CRC is that): a
+    /// stream cut after trailing zero bytes still ends there.
     pub fn is_finished(&self) -> bool {
         self.rest.is_empty() && self.x == STATE_LOW
     }

@@ -152,12 +152,10 @@ fn malformed_tables_and_streams_are_errors() {
             Ok(mut d) => {
                 let got: Vec<u32> = (0..s.len()).map(|_| d.symbol()).collect();
                 assert!(got.iter().all(|&g| g < t.alphabet()));
-                // Only zero bytes cut off (they read as zeros) can end
-                // where the encoder began.
-                if d.is_finished() {
-                    assert_eq!(got, s);
-                    assert!(bytes[cut..].iter().all(|&b| b == 0));
-                }
+                assert!(d.state() < 1 << 31);
+                // No integrity check in the coder (the container's CRC is
+                // that): a cut stream may even end at x = 2^23.
+                assert!(cut < bytes.len() || d.is_finished());
             }
         }
     }
