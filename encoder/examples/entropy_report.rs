@@ -118,16 +118,12 @@ fn main() {
                         (total as f64 * 8.0 / h - 1.0) * 100.0
                     );
                 }
-                // The escape of §10.4 at the best of a few cut-offs.
-                let best = [8u32, 16, 32, 64, 128]
-                    .iter()
-                    .filter_map(|&e| {
-                        let model = Model::fit_values(&s, e).ok()?;
-                        let mut b = model.table_bytes();
-                        b.extend(model.encode_values(&s).ok()?);
-                        Some((b.len(), e, model))
-                    })
-                    .min_by_key(|&(len, e, _)| (len, e));
+                // The escape of §10.4 at the best cut-off.
+                let best = Model::fit_values_best(&s).ok().map(|(model, e)| {
+                    let mut b = model.table_bytes();
+                    b.extend(model.encode_values(&s).expect("encodes"));
+                    (b.len(), e, model)
+                });
                 if let Some((len, e, model)) = best {
                     println!(
                         "{:<24} {:>8} {:>5} {:>3} {:>8.4} {:>8.4} {:>6} {:>8} {:>8.3}",

@@ -96,6 +96,45 @@ impl Model {
         Model::best(&hist)
     }
 
+    /// The escape symbol `E` and table for `values` (SPEC.md §10.4) of
+    /// least estimated total size (table, coded symbols, raw bits of the
+    /// escapes, state) over `E` = 1, 2, 3, 4, 6, 8, 12, … and `max + 1` (no
+    /// escape used): long-tailed values keep a small table.
+    pub fn fit_values_best(values: &[u32]) -> Result<(Model, u32), EntropyError> {
+        let max = values.iter().copied().max().unwrap_or(0);
+        let top = max.saturating_add(1).min(MAX_ALPHABET - 1);
+        let mut candidates = vec![top];
+        let mut e = 1u32;
+        while e < top {
+            candidates.push(e);
+            if e >= 2 && e + e / 2 < top {
+                candidates.push(e + e / 2);
+            }
+            e *= 2;
+        }
+        let mut best: Option<(f64, Model, u32)> = None;
+        for e in candidates {
+            let mut hist = vec![0u64; e as usize + 1];
+            let mut raw_bits = 0f64;
+            for &v in values {
+                hist[v.min(e) as usize] += 1;
+                if v >= e {
+                    let u = u64::from(v - e) + 1;
+                    raw_bits += f64::from(5 + 63 - u.leading_zeros());
+                }
+            }
+            let Ok(m) = Model::best(&hist) else {
+                continue;
+            };
+            let bits = m.table_bytes().len() as f64 * 8.0 + m.coded_bits(&hist) + raw_bits;
+            if best.as_ref().is_none_or(|(b, _, _)| bits < *b) {
+                best = Some((bits, m, e));
+            }
+        }
+        best.map(|(_, m, e)| (m, e))
+            .ok_or(EntropyError::Alphabet(u64::from(top) + 1))
+    }
+
     /// The table of least total size (table bytes + coded symbols + the
     /// 4-byte state) over every precision `n ≤ 15` that holds the present
     /// symbols, for symbol counts `hist` (its length is the alphabet).
@@ -467,6 +506,35 @@ mod tests {
             m0.encode_values(&[u32::MAX]),
             Err(EntropyError::ValueTooLarge { .. })
         ));
+    }
+
+    #[test]
+    fn best_escape_beats_a_full_table_on_long_tails() {
+        // Mostly small values, a long sparse tail.
+        let values: Vec<u32> = (0..20_000u32)
+            .map(|i| {
+                let h = i.wrapping_mul(2_654_435_761);
+                if h % 50 == 0 {
+                    h % 5000
+                } else {
+                    (h >> 7) % 4 + (h >> 20) % 3
+                }
+            })
+            .collect();
+        let full = encode_all(&values).unwrap();
+        let (model, e) = Model::fit_values_best(&values).unwrap();
+        let mut bytes = model.table_bytes();
+        bytes.extend(model.encode_values(&values).unwrap());
+        assert!(
+            e < 5000 && bytes.len() < full.len(),
+            "E = {e}: {} vs {}",
+            bytes.len(),
+            full.len()
+        );
+        let (t, used) = Table::parse(&bytes).unwrap();
+        let mut d = Decoder::new(t, &bytes[used..]).unwrap();
+        assert!(values.iter().all(|&v| d.value() == v));
+        assert!(d.is_finished());
     }
 
     #[test]
