@@ -139,26 +139,58 @@ impl<'a> Table<'a> {
     }
 
     /// The symbol whose interval `[cum, cum + f)` holds `slot < M`, with
-    /// `cum` and `f` (always found on a validated table).
+    /// `cum` and `f` (always found on a validated table). The scan of
+    /// [`Scan::next`] in locals, without its end-of-input bookkeeping: the
+    /// table was read to its end once by [`Table::parse`], and bytes past
+    /// `after0`'s (none on a validated table) read as zero.
     #[inline(always)]
     fn find(&self, slot: u32) -> (u32, u32, u32) {
         if slot < self.count0 {
             return (0, 0, self.count0);
         }
+        let a = &self.after0;
+        let (mut bytes, mut acc, mut avail, mut rem, mut width) =
+            (a.bytes, a.acc, a.avail, a.rem, a.width);
         let mut cum = self.count0;
-        let mut scan = self.after0;
         let last = self.alphabet.wrapping_sub(1);
         let mut s = 1;
         while s < last {
-            let f = scan.next();
+            // `width ≤ 15`: two bytes at most.
+            if avail < width {
+                acc |= u32::from(pop(&mut bytes)) << avail;
+                avail = avail.wrapping_add(8);
+                if avail < width {
+                    acc |= u32::from(pop(&mut bytes)) << avail;
+                    avail = avail.wrapping_add(8);
+                }
+            }
+            let f = acc & ((1u32 << width).wrapping_sub(1));
             let next = cum.wrapping_add(f);
             if slot < next {
                 return (s, cum, f);
             }
+            acc >>= width;
+            avail = avail.wrapping_sub(width);
             cum = next;
+            rem = rem.wrapping_sub(f);
+            while rem < (1u32 << width) >> 1 {
+                width = width.wrapping_sub(1);
+            }
             s = s.wrapping_add(1);
         }
-        (last, cum, scan.rem)
+        (last, cum, rem)
+    }
+}
+
+/// The next byte of `bytes` (0 past the end).
+#[inline(always)]
+fn pop(bytes: &mut &[u8]) -> u8 {
+    match **bytes {
+        [b, ref rest @ ..] => {
+            *bytes = rest;
+            b
+        }
+        [] => 0,
     }
 }
 
