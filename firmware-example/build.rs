@@ -342,7 +342,9 @@ fn entropy_streams(bench: bool, out_dir: &Path) {
                 .collect()
         };
         let flat = |len: usize, a: u32| -> Vec<u32> {
-            (0..len).map(|i| ((i as u32).wrapping_mul(2_654_435_761) >> 8) % a).collect()
+            (0..len)
+                .map(|i| ((i as u32).wrapping_mul(2_654_435_761) >> 8) % a)
+                .collect()
         };
         let streams: Vec<(&str, Vec<u32>)> = vec![
             ("laplace-0.5", laplace(10_000, 0.5)),

@@ -74,7 +74,10 @@ pub fn run(text: &mut Out) -> bool {
         let parsed = parse(s.bytes);
         let parse_ticks = ticks::since(t0, ticks::now());
         let Some((table, mut d)) = parsed else {
-            text.str("# entropy stream=").str(s.name).str(" error=parse").nl();
+            text.str("# entropy stream=")
+                .str(s.name)
+                .str(" error=parse")
+                .nl();
             ok = false;
             continue;
         };
@@ -97,7 +100,10 @@ pub fn run(text: &mut Out) -> bool {
             .kv("alphabet", u64::from(table.alphabet()))
             .kv("n", u64::from(table.precision()))
             .kv("bytes", s.bytes.len() as u64)
-            .kv("parse_instructions", instructions(u64::from(parse_ticks), cal))
+            .kv(
+                "parse_instructions",
+                instructions(u64::from(parse_ticks), cal),
+            )
             .kv("per_symbol_x100", per_x100)
             .kv("ok", u64::from(good))
             .nl();
