@@ -6,10 +6,13 @@
 //! Hand-written, not a crate: the format must be ours (SPEC.md is the
 //! bitstream's source of truth) and the decoder must be `no_std`, free of
 //! allocation and panics, and read its tables straight from flash. The rANS
-//! crates (`constriction`, ryg-style ports) decode from tables they build in
-//! memory (`Vec`-backed, or slot tables of `M` entries) in formats of their
-//! own; a compact table the MCU scans in place is the point here, and the
-//! coder itself is a few dozen lines.
+//! crates decode through models they build in memory from the counts
+//! (`constriction`'s lookup decoder models hold a `Vec<u16>` symbol table
+//! and a `Box<[u16]>` slot table; the `no_std` `ans` crate builds a
+//! `FrequencyTable` from counts and its batch decoder returns a `Vec`), and
+//! none has a serialised table format read in place; a compact table the MCU
+//! scans where it lies is the point here, and the coder itself is a few
+//! dozen lines.
 //!
 //! ```text
 //! let model = Model::fit(&symbols)?;        // histogram → normalised table, best n
