@@ -471,6 +471,29 @@ mod tests {
     }
 
     #[test]
+    fn normaliser_is_optimal() {
+        // Against every allocation of M = 16 over four present symbols.
+        for hist in [
+            [9u64, 3, 2, 1],
+            [100, 1, 1, 1],
+            [5, 5, 5, 5],
+            [1000, 37, 3, 250],
+        ] {
+            let greedy = Model::with_precision(&hist, 4).unwrap().coded_bits(&hist);
+            let mut best = f64::INFINITY;
+            for a in 1..16u32 {
+                for b in 1..16 - a {
+                    for c in 1..16 - a - b {
+                        let m = Model::from_counts(4, vec![a, b, c, 16 - a - b - c]).unwrap();
+                        best = best.min(m.coded_bits(&hist));
+                    }
+                }
+            }
+            assert!((greedy - best).abs() < 1e-9, "{hist:?}: {greedy} vs {best}");
+        }
+    }
+
+    #[test]
     fn normaliser_beats_rounding() {
         // Cost of the greedy table never above that of plain rounding with
         // a fix-up on the largest count.
