@@ -167,6 +167,10 @@ fn main() {
     // tick (0: never).
     let timeout_ms = whole_number("MOCAP_STREAM_TIMEOUT_MS", 500);
     let estop_at_tick = whole_number("MOCAP_ESTOP_AT_TICK", 0);
+    // The entropy coder's measurement (`MOCAP_ENTROPY_BENCH=1`, src/entropy_bench.rs): rANS
+    // streams encoded here; none otherwise.
+    let entropy_bench = whole_number("MOCAP_ENTROPY_BENCH", 0) != 0;
+    entropy_streams(entropy_bench, &out_dir);
 
     // ---- the figure: its rig file, compiled into hard limits (src/servo.rs)
     figure(&manifest_dir, &out_dir);
@@ -181,7 +185,9 @@ fn main() {
          /// Streaming mode: ms without an accepted frame that park the servos; 0 holds the last pose.\n\
          pub const STREAM_TIMEOUT_MS: u32 = {timeout_ms};\n\
          /// The output tick at which the simulated e-stop is pressed (`MOCAP_ESTOP_AT_TICK`); 0 never.\n\
-         pub const ESTOP_AT_TICK: u32 = {estop_at_tick};\n"
+         pub const ESTOP_AT_TICK: u32 = {estop_at_tick};\n\
+         /// The entropy coder's measurement instead of playback (`MOCAP_ENTROPY_BENCH=1`).\n\
+         pub const ENTROPY_BENCH: bool = {entropy_bench};\n"
     );
     write_if_changed(&out_dir.join("config.rs"), config.as_bytes());
 }
@@ -302,4 +308,62 @@ fn copy_or_fail(from: &Path, to: &Path, what: &str) {
         ))
     });
     write_if_changed(to, &bytes);
+}
+
+/// `OUT_DIR/entropy_bench.rs`: `STREAMS`, the rANS streams (SPEC.md §10) that
+/// src/entropy_bench.rs decodes and times — table and one block each, with the symbol count and
+/// the checksum (`sum = sum · 31 + symbol`, wrapping) of the symbols — or none without the bench.
+fn entropy_streams(bench: bool, out_dir: &Path) {
+    use mocap_encoder::entropy::encode_all;
+    let mut src = String::from("pub static STREAMS: &[Stream] = &[\n");
+    if bench {
+        // xorshift32, fixed seeds: the same bytes on every build.
+        let mut seed = 0x2545_f491u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        let mut unit = move || (f64::from(next()) + 0.5) / 4_294_967_296.0;
+        // Zigzag residuals of a two-sided geometric source (ratio r): quantised motion differences.
+        let mut laplace = |len: usize, r: f64| -> Vec<u32> {
+            (0..len)
+                .map(|_| {
+                    let m = (unit().ln() / r.ln()).floor() as u32;
+                    if m == 0 {
+                        0
+                    } else if unit() < 0.5 {
+                        2 * m - 1
+                    } else {
+                        2 * m
+                    }
+                })
+                .collect()
+        };
+        let flat = |len: usize, a: u32| -> Vec<u32> {
+            (0..len)
+                .map(|i| ((i as u32).wrapping_mul(2_654_435_761) >> 8) % a)
+                .collect()
+        };
+        let streams: Vec<(&str, Vec<u32>)> = vec![
+            ("laplace-0.5", laplace(10_000, 0.5)),
+            ("laplace-0.8", laplace(10_000, 0.8)),
+            ("flat-16", flat(10_000, 16)),
+            ("flat-256", flat(4_000, 256)),
+            ("one-symbol", vec![0; 10_000]),
+        ];
+        for (name, symbols) in streams {
+            let bytes = encode_all(&symbols).expect("the bench streams encode");
+            let checksum = symbols
+                .iter()
+                .fold(0u32, |s, &x| s.wrapping_mul(31).wrapping_add(x));
+            src.push_str(&format!(
+                "    Stream {{ name: {name:?}, symbols: {}, checksum: {checksum}, bytes: &{bytes:?} }},\n",
+                symbols.len()
+            ));
+        }
+    }
+    src.push_str("];\n");
+    write_if_changed(&out_dir.join("entropy_bench.rs"), src.as_bytes());
 }

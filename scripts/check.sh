@@ -7,7 +7,7 @@
 #   fw-clippy-B   cargo clippy -- -D warnings of the firmware for board B, in each build mode
 #                 (frames, sample, servo, stream), through scripts/toolchain.sh's route
 #   nostd-...     mocap-decoder on thumbv6m-none-eabi with no default features, then each codec
-#                 feature alone, and defmt; mocap-servo with no default features and pca9685
+#                 feature alone, entropy, and defmt; mocap-servo with no default features and pca9685
 #   panic-B       the firmware ELFs of board B (scripts/firmware.sh build, every mode) have no panic machinery
 #                 (core::panicking::*, panic_fmt, panic_bounds_check, *_fail) except the call
 #                 sites listed, each with why it cannot fire, in scripts/panic-allowlist.txt
@@ -220,7 +220,7 @@ for b in $(mocap_boards); do
     step "fw-clippy-$b" fw_clippy "$b"
 done
 step nostd-decoder nostd_build mocap-decoder
-for f in codec-index codec-pca-spline codec-predictive defmt; do
+for f in codec-index codec-pca-spline codec-predictive entropy defmt; do
     step "nostd-decoder-$f" nostd_build mocap-decoder --features "$f"
 done
 step nostd-servo nostd_build mocap-servo

@@ -31,6 +31,10 @@
 #       frame (MOCAP_STREAM_TIMEOUT_MS; default 500, 0 holds the last pose). --estop-at N
 #       simulates the e-stop input pressed at output tick N (MOCAP_ESTOP_AT_TICK; QEMU's boards
 #       have no button).
+#       --entropy-bench builds the entropy-coder measurement instead of playback
+#       (MOCAP_ENTROPY_BENCH=1, firmware-example/src/entropy_bench.rs): it decodes the rANS
+#       streams build.rs encodes (SPEC.md §10) and prints `# entropy ...` lines with the
+#       instructions per symbol (exact with --icount); the clip is not played.
 #   scripts/firmware.sh size --board B [--clip PATH.mcb] [--sample-us P] [--servo OUTPUT] [--stream]
 #       Builds, then prints key=value lines: text, data, bss, flash_bytes (text+data),
 #       ram_static_bytes (data+bss), flash_clip_bytes, flash_without_clip_bytes,
@@ -90,6 +94,7 @@ FIGURE="$MOCAP_REPO_ROOT/assets/rigs/animatronic_demo.toml"
 POLICY=""
 STREAM_TIMEOUT=""
 ESTOP_AT=""
+ENTROPY_BENCH=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
@@ -111,6 +116,7 @@ while [ "$#" -gt 0 ]; do
         --stream-timeout=*) STREAM_TIMEOUT="${1#*=}"; shift ;;
         --estop-at) [ "$#" -ge 2 ] || die "--estop-at needs a tick"; ESTOP_AT="$2"; shift 2 ;;
         --estop-at=*) ESTOP_AT="${1#*=}"; shift ;;
+        --entropy-bench) ENTROPY_BENCH=1; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -189,7 +195,7 @@ build() {
     # not once per board; each board's code goes to the target's own subfolder.
     target_dir="$FW/target/fw"
     elf_dir="$FW/target/$BOARD/elf"
-    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}.elf"
+    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}${ENTROPY_BENCH:+-entropy}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/fw.lock"
     # One build at a time (cargo locks the shared target dir anyway); the ELF is copied out
@@ -199,8 +205,8 @@ build() {
         cd "$FW"
         MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
             MOCAP_FIGURE="$staged_figure" MOCAP_FIGURE_NAME="$FIGURE" MOCAP_POLICY="$POLICY" \
-            MOCAP_STREAM_TIMEOUT_MS="$STREAM_TIMEOUT" MOCAP_ESTOP_AT_TICK="$ESTOP_AT" CARGO_TARGET_DIR="$target_dir" \
-            mocap_cargo "$TARGET" build --release --no-default-features \
+            MOCAP_STREAM_TIMEOUT_MS="$STREAM_TIMEOUT" MOCAP_ESTOP_AT_TICK="$ESTOP_AT" MOCAP_ENTROPY_BENCH="$ENTROPY_BENCH" \
+            CARGO_TARGET_DIR="$target_dir" mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
         cp "$target_dir/$TARGET/release/mocap-firmware" "$elf.$$"

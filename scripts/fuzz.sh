@@ -3,7 +3,9 @@
 # decoder-nostd/fuzz/fuzz_targets/ for SECONDS each —
 #   parse_and_play  any bytes -> Clip::parse + every way of playing: an Err or values, no panic;
 #   readers         any bytes -> the BVH, ASF, ASF + AMC and C3D readers: a motion or a located error;
-#   roundtrip       arbitrary small motion -> encoder -> decoder: every value within the bound.
+#   roundtrip       arbitrary small motion -> encoder -> decoder: every value within the bound;
+#   entropy         any bytes -> the rANS table parser + decoder (SPEC.md §10): an Err or symbols in
+#                   the alphabet; decoded symbols re-encode and decode back.
 #
 #   bash scripts/fuzz.sh [SECONDS] [TARGET...]   # default 120 s per target, all targets
 #   bash scripts/fuzz.sh --smoke                 # 30 s per target (scripts/test.sh runs this)

@@ -177,6 +177,14 @@ pub enum Error {
         /// Which rule of §5b is broken.
         rule: &'static str,
     },
+    /// An entropy-coder frequency table breaks a rule of §10.2.
+    EntropyTable {
+        /// Which rule of §10.2 is broken.
+        rule: &'static str,
+    },
+    /// An entropy-coded stream does not start with a state in
+    /// `2^23 … 2^31 − 1`, or has fewer than four bytes (§10.3).
+    EntropyState,
     /// The show table breaks a rule of §9.2.
     ShowMalformed {
         /// Byte offset inside the show table.
@@ -322,6 +330,10 @@ impl fmt::Display for Error {
             ),
             Error::PcaMalformed { rule } => write!(f, "pca-spline codec: {rule}"),
             Error::PredictiveMalformed { rule } => write!(f, "predictive codec: {rule}"),
+            Error::EntropyTable { rule } => write!(f, "entropy table: {rule}"),
+            Error::EntropyState => {
+                f.write_str("entropy-coded stream: initial state missing or out of range")
+            }
             Error::ShowMalformed { offset } => write!(f, "malformed show table at byte {offset}"),
             Error::ShowClipCodec { clip } => {
                 write!(f, "show clip {clip}: no codec section of its own")

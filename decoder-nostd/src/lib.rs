@@ -34,6 +34,11 @@ mod bits;
 mod clip;
 mod codec;
 pub mod consts;
+/// The static rANS coder of SPEC.md §10, shared by the codecs that need
+/// one; public for the encoder and the workspace tests (outside semver).
+#[cfg(feature = "entropy")]
+#[doc(hidden)]
+pub mod entropy;
 mod error;
 mod frame_time;
 mod header;

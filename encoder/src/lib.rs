@@ -17,6 +17,7 @@ pub mod clipfile;
 pub mod codec;
 pub mod container;
 pub mod encode;
+pub mod entropy;
 pub mod fixed;
 pub mod generate;
 pub mod input;

@@ -3,7 +3,8 @@
 //! Built with `MOCAP_SAMPLE_US=P`, it prints `Player::sample_at` at t = 0, P, 2P, … instead
 //! (up to and including the first t past the clip's duration). Built with `MOCAP_SERVO`, it
 //! plays a servo clip through a servo output (`servo.rs`); with `MOCAP_STREAM=1`, it takes
-//! clips and live poses from its UART (`stream.rs`).
+//! clips and live poses from its UART (`stream.rs`); with `MOCAP_ENTROPY_BENCH=1`, it times
+//! the entropy coder instead (`entropy_bench.rs`).
 //!
 //! Output format: see README.md. Lines starting with `#` are metadata; every other line is
 //! one frame (or sample) and must be byte-identical to the host decoder's output for the clip.
@@ -11,6 +12,7 @@
 #![no_main]
 
 mod board;
+mod entropy_bench;
 mod servo;
 mod show;
 mod stream;
@@ -36,7 +38,7 @@ static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
 mod config {
     include!(concat!(env!("OUT_DIR"), "/config.rs"));
 }
-use config::{SAMPLE_US, SERVO, STREAM};
+use config::{ENTROPY_BENCH, SAMPLE_US, SERVO, STREAM};
 
 /// Whether this build samples with `sample_at` (else it plays every frame with `next_frame`).
 const SAMPLING: bool = SAMPLE_US != 0;
@@ -537,6 +539,11 @@ fn main() -> ! {
     };
     ticks::start(&mut core.SYST);
 
+    if ENTROPY_BENCH {
+        let ok = entropy_bench::run(&mut text);
+        text.str("# end\n");
+        exit(ok)
+    }
     let ok = match run(&mut text) {
         Ok(()) => true,
         Err(failure) => {

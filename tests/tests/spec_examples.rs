@@ -768,3 +768,98 @@ fn missing_samples_example() {
         Some(Error::MissingMalformed { offset: 5 })
     );
 }
+
+/// The entropy coder's example of SPEC.md §10.6 (```` ```text
+/// spec-entropy=NAME symbols=… ````): table and stream bytes.
+fn entropy_examples() -> Vec<(String, Vec<u32>, Vec<u8>)> {
+    let spec = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../SPEC.md"))
+        .expect("SPEC.md is readable");
+    let mut out = Vec::new();
+    let mut lines = spec.lines();
+    while let Some(line) = lines.next() {
+        let Some(attrs) = line.strip_prefix("```text spec-entropy=") else {
+            continue;
+        };
+        let mut parts = attrs.split_whitespace();
+        let name = parts.next().unwrap().to_string();
+        let mut symbols = Vec::new();
+        for p in parts {
+            match p.strip_prefix("symbols=") {
+                Some(v) => symbols = v.split(',').map(|x| x.parse().unwrap()).collect(),
+                None => panic!("{name}: unknown attribute {p}"),
+            }
+        }
+        let mut bytes = Vec::new();
+        for l in lines.by_ref() {
+            if l.starts_with("```") {
+                break;
+            }
+            let hex = l.split("  ").next().unwrap_or("");
+            for tok in hex.split_whitespace() {
+                assert_eq!(tok.len(), 2, "{name}: bad hex token {tok:?} in {l:?}");
+                bytes.push(u8::from_str_radix(tok, 16).expect("hex byte"));
+            }
+        }
+        out.push((name, symbols, bytes));
+    }
+    out
+}
+
+#[test]
+fn entropy_example() {
+    use mocap_decoder::entropy::{Decoder, Table};
+    let examples = entropy_examples();
+    assert!(!examples.is_empty(), "SPEC.md §10.6 example not found");
+    for (name, symbols, bytes) in examples {
+        // The encoder writes exactly these bytes.
+        let encoded = mocap_encoder::entropy::encode_all(&symbols).unwrap();
+        let hex: Vec<String> = encoded.iter().map(|b| format!("{b:02x}")).collect();
+        assert_eq!(encoded, bytes, "{name}: encoder gives {}", hex.join(" "));
+        // The decoder decodes them to the stated symbols; the trace of the
+        // steps is printed for the table of §10.6.
+        let (t, used) = Table::parse(&bytes).unwrap();
+        let mut d = Decoder::new(t, &bytes[used..]).unwrap();
+        let mut got = Vec::new();
+        for _ in 0..symbols.len() {
+            let x = d.state();
+            let slot = x & ((1 << t.precision()) - 1);
+            let before = d.remaining();
+            let s = d.symbol();
+            println!(
+                "{name}: x {x:08x} slot {slot} -> symbol {s}, x {:08x}, {} bytes read",
+                d.state(),
+                before - d.remaining()
+            );
+            got.push(s);
+        }
+        assert_eq!(got, symbols, "{name}");
+        assert!(d.is_finished(), "{name}: every byte read, x back at 2^23");
+        // A corrupted table: `W` 3 → 4 makes symbol 0's count 13 > M = 8.
+        let mut bad = bytes.clone();
+        bad[0] = 0x43;
+        assert!(
+            matches!(
+                Table::parse(&bad),
+                Err(Error::EntropyTable {
+                    rule: "a count is above what is left of M"
+                })
+            ),
+            "{name}"
+        );
+        // Zero alphabet, truncated table, missing state.
+        let mut zero = bytes.clone();
+        zero[1] = 0;
+        assert!(matches!(
+            Table::parse(&zero),
+            Err(Error::EntropyTable { .. })
+        ));
+        assert!(matches!(
+            Table::parse(&bytes[..used - 1]),
+            Err(Error::EntropyTable { .. })
+        ));
+        assert_eq!(
+            Decoder::new(t, &bytes[used..used + 3]).unwrap_err(),
+            Error::EntropyState
+        );
+    }
+}
