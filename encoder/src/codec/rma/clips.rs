@@ -116,13 +116,7 @@ fn repeated_cost(f: &Features, run: &[(usize, usize)]) -> f64 {
 /// The repeated runs `[(frame, reference)]` that `maps` give the interval
 /// `s..e`: free frames outside it whose reference lies in it, each taken
 /// once, in runs of consecutive frames of at least `min` frames.
-fn images(
-    maps: &[Map],
-    label: &[Label],
-    s: usize,
-    e: usize,
-    min: usize,
-) -> Vec<Run> {
+fn images(maps: &[Map], label: &[Label], s: usize, e: usize, min: usize) -> Vec<Run> {
     let mut taken = std::collections::HashSet::new();
     let mut runs: Vec<Run> = Vec::new();
     for m in maps {
