@@ -103,10 +103,10 @@ fn keys(section: &[u8], keys: &mut Keys) -> Option<()> {
                 .map(|_| widths.iter().map(|&x| i64::from(b.read(x))).collect())
                 .collect();
             for j in 0..k {
-                for r in 0..m {
-                    let c = codes[r][j];
-                    let p1 = if r > 0 { codes[r - 1][j] } else { 0 };
-                    let p2 = if r > 1 { codes[r - 2][j] } else { p1 };
+                let column: Vec<i64> = codes.iter().map(|row| row[j]).collect();
+                for (r, &c) in column.iter().enumerate() {
+                    let p1 = if r > 0 { column[r - 1] } else { 0 };
+                    let p2 = if r > 1 { column[r - 2] } else { p1 };
                     keys.deltas.push(zz(c - p1));
                     keys.second.push(zz(c - (2 * p1 - p2)));
                 }
