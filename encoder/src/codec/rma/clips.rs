@@ -17,6 +17,9 @@
 
 use super::{Features, Params, Path};
 
+/// Most neighbouring intervals a candidate primary clip spans.
+pub const SPAN: usize = 4;
+
 /// A primary clip's overhead, in units of [`Features::spread`].
 pub const PRIMARY_OVERHEAD: f64 = 0.5;
 /// A repeated clip's overhead, in units of [`Features::spread`].
@@ -169,7 +172,15 @@ pub fn extract(f: &Features, paths: &[Path], p: &Params, frames: usize) -> Vec<C
     }
     cuts.sort_unstable();
     cuts.dedup();
-    let intervals: Vec<(usize, usize)> = cuts.windows(2).map(|w| (w[0], w[1])).collect();
+    // Candidate primaries: the intervals between neighbouring cuts, and
+    // runs of up to SPAN of them (where paths are many, single intervals
+    // are shorter than the repetitions they could carry).
+    let intervals: Vec<(usize, usize)> = (0..cuts.len())
+        .flat_map(|a| {
+            let cuts = &cuts;
+            (a + 1..cuts.len().min(a + 1 + SPAN)).map(move |b| (cuts[a], cuts[b]))
+        })
+        .collect();
     let mut label = vec![Label::Free; len];
     let mut primaries = 0;
     loop {
