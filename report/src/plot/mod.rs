@@ -3,6 +3,7 @@
 //! plotters, SVG or PNG by the file's extension; text uses the font bundled
 //! by [`style::register_font`] (no system font library).
 
+pub mod rma;
 pub mod style;
 
 use std::path::{Path, PathBuf};

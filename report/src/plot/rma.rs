@@ -1,0 +1,146 @@
+//! The picture for people who tune the repeated motion analysis (issue 14):
+//! the self-distance plot of the projected coefficients (darker = more
+//! alike), the similar-posture paths found in it (upper half, and mirrored
+//! in the lower half), and under it the clips on the time axis — each
+//! primary clip in its colour, its repeated clips in the same colour,
+//! lighter, unique clips grey.
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::style::PALETTE;
+use super::{with_backend, PlotError};
+use mocap_encoder::codec::rma::{Analysis, ClipKind};
+
+/// Pixels of the plot's side (the analysis frames are sampled down to it).
+const SIDE: u32 = 600;
+
+/// Draws `a` (of a take called `name`) into `path` (PNG, or SVG by the
+/// extension).
+pub fn self_distance_plot(path: &Path, a: &Analysis, name: &str) -> Result<(), PlotError> {
+    let size = (SIDE + 40, SIDE + 150);
+    with_backend(path, size, |r| draw(r, a, name), |r| draw(r, a, name))
+}
+
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    a: &Analysis,
+    name: &str,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
+    let f = &a.features;
+    let [pri, rep, uni] = a.frames_by_kind();
+    let total = (pri + rep + uni).max(1);
+    root.draw(&Text::new(
+        format!(
+            "{name}: self-distance, {} paths; frames primary {:.0} %, repeated {:.0} %, unique {:.0} %",
+            a.paths.len(),
+            100.0 * pri as f64 / total as f64,
+            100.0 * rep as f64 / total as f64,
+            100.0 * uni as f64 / total as f64
+        ),
+        (20, 8),
+        ("sans-serif", 15),
+    ))?;
+    let (x0, y0) = (20i32, 36i32);
+    let n = f.len.max(1);
+    let side = SIDE.min(n as u32).max(1);
+    let px = SIDE as f64 / side as f64;
+    // The plot, sampled down to `side` × `side` cells.
+    let at = |c: u32| ((c as f64 + 0.5) * n as f64 / side as f64) as usize;
+    let mut d = vec![0.0f64; (side * side) as usize];
+    let mut max = 0.0f64;
+    if f.k > 0 {
+        for y in 0..side {
+            for x in 0..side {
+                let v = f.dist(at(x).min(n - 1), at(y).min(n - 1));
+                d[(y * side + x) as usize] = v;
+                max = max.max(v);
+            }
+        }
+    }
+    let max = max.max(f64::MIN_POSITIVE);
+    for y in 0..side {
+        for x in 0..side {
+            let g = (255.0 * (d[(y * side + x) as usize] / max).sqrt()) as u8;
+            let (cx, cy) = (x0 + (x as f64 * px) as i32, y0 + (y as f64 * px) as i32);
+            let w = (px.ceil() as i32).max(1);
+            root.draw(&Rectangle::new(
+                [(cx, cy), (cx + w, cy + w)],
+                RGBColor(g, g, g).filled(),
+            ))?;
+        }
+    }
+    // The paths, in both halves.
+    let to_px = |v: usize| (v as f64 * SIDE as f64 / n as f64) as i32;
+    for (i, p) in a.paths.iter().enumerate() {
+        let colour = PALETTE[i % PALETTE.len()];
+        let upper: Vec<(i32, i32)> = p
+            .points
+            .iter()
+            .map(|&(i, j)| (x0 + to_px(j), y0 + to_px(i)))
+            .collect();
+        let lower: Vec<(i32, i32)> = p
+            .points
+            .iter()
+            .map(|&(i, j)| (x0 + to_px(i), y0 + to_px(j)))
+            .collect();
+        root.draw(&PathElement::new(upper, colour.stroke_width(2)))?;
+        root.draw(&PathElement::new(lower, colour.stroke_width(2)))?;
+    }
+    // The clips under the plot, on the same time axis.
+    let frames = a.clips.last().map_or(1, |c| c.end).max(1);
+    let tx = |t: usize| x0 + (t as f64 * SIDE as f64 / frames as f64) as i32;
+    let strip = y0 + SIDE as i32 + 20;
+    let mut colour_of = vec![None; a.clips.len()];
+    let mut next = 0;
+    for (i, c) in a.clips.iter().enumerate() {
+        if c.kind == ClipKind::Primary {
+            colour_of[i] = Some(PALETTE[next % PALETTE.len()]);
+            next += 1;
+        }
+    }
+    for (i, c) in a.clips.iter().enumerate() {
+        let (fill, label) = match &c.kind {
+            ClipKind::Primary => (colour_of[i].unwrap_or(BLACK), "P"),
+            ClipKind::Repeated { primary, .. } => (
+                colour_of
+                    .get(*primary)
+                    .copied()
+                    .flatten()
+                    .map_or(RGBColor(160, 160, 160), |p| lighten(p)),
+                "R",
+            ),
+            ClipKind::Unique => (RGBColor(200, 200, 200), ""),
+        };
+        root.draw(&Rectangle::new(
+            [(tx(c.start), strip), (tx(c.end), strip + 40)],
+            fill.filled(),
+        ))?;
+        root.draw(&Rectangle::new(
+            [(tx(c.start), strip), (tx(c.end), strip + 40)],
+            BLACK.stroke_width(1),
+        ))?;
+        if tx(c.end) - tx(c.start) > 12 {
+            root.draw(&Text::new(
+                label,
+                (tx(c.start) + 3, strip + 12),
+                ("sans-serif", 13),
+            ))?;
+        }
+    }
+    root.draw(&Text::new(
+        "clips: P primary (its colour), R repeated (its primary's colour, lighter), grey unique",
+        (x0, strip + 52),
+        ("sans-serif", 13),
+    ))?;
+    root.present()?;
+    Ok(())
+}
+
+fn lighten(c: RGBColor) -> RGBColor {
+    let l = |v: u8| (u16::from(v) + (255 - u16::from(v)) / 2) as u8;
+    RGBColor(l(c.0), l(c.1), l(c.2))
+}
