@@ -110,7 +110,7 @@ fn draw<DB: DrawingBackend>(
                     .get(*primary)
                     .copied()
                     .flatten()
-                    .map_or(RGBColor(160, 160, 160), |p| lighten(p)),
+                    .map_or(RGBColor(160, 160, 160), lighten),
                 "R",
             ),
             ClipKind::Unique => (RGBColor(200, 200, 200), ""),
