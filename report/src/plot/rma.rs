@@ -144,3 +144,28 @@ fn lighten(c: RGBColor) -> RGBColor {
     let l = |v: u8| (u16::from(v) + (255 - u16::from(v)) / 2) as u8;
     RGBColor(l(c.0), l(c.1), l(c.2))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mocap_encoder::codec::rma::{self, Params};
+
+    /// The demo clip's analysis draws as PNG and SVG; an unwritable file
+    /// is named in the error.
+    #[test]
+    fn draws_the_demo_and_names_a_bad_file() {
+        let m = mocap_encoder::generate::animatronic_demo();
+        let a = rma::analyse(&m, &Params::default());
+        let dir = std::env::temp_dir().join(format!("mocap-rma-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for name in ["demo.png", "demo.svg"] {
+            let path = dir.join(name);
+            self_distance_plot(&path, &a, "demo").unwrap();
+            assert!(std::fs::metadata(&path).unwrap().len() > 1000, "{name}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+        let bad = Path::new("/nonexistent-mocap-dir/rma.png");
+        let e = self_distance_plot(bad, &a, "demo").unwrap_err();
+        assert_eq!(e.path(), bad);
+    }
+}
