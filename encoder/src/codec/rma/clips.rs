@@ -116,26 +116,73 @@ fn repeated_cost(f: &Features, run: &[(usize, usize)]) -> f64 {
     stdev(run.iter().map(|&(t, r)| f.dist(r, t))) * run.len() as f64 + REPEATED_OVERHEAD * f.spread
 }
 
+/// Analysis frames per block of [`MapIndex`].
+const BLOCK: usize = 64;
+
+/// Which maps touch which analysis frames, by blocks of [`BLOCK`] frames:
+/// the maps whose reference side and whose repeated side meet each block,
+/// so that a candidate's images and a labelled frame's dependants are
+/// looked up among the maps nearby, not among all of them.
+struct MapIndex {
+    by_ref: Vec<Vec<usize>>,
+    by_frame: Vec<Vec<usize>>,
+}
+
+impl MapIndex {
+    fn new(maps: &[Map], len: usize) -> MapIndex {
+        let blocks = len.div_ceil(BLOCK).max(1);
+        let mut by_ref = vec![Vec::new(); blocks];
+        let mut by_frame = vec![Vec::new(); blocks];
+        for (n, m) in maps.iter().enumerate() {
+            if let (Some(&lo), Some(&hi)) = (m.refs.first(), m.refs.last()) {
+                for b in &mut by_ref[lo / BLOCK..=hi / BLOCK] {
+                    b.push(n);
+                }
+                for b in &mut by_frame[m.start / BLOCK..=(m.end() - 1) / BLOCK] {
+                    b.push(n);
+                }
+            }
+        }
+        MapIndex { by_ref, by_frame }
+    }
+
+    /// The maps that may refer into `s..e`, in order.
+    fn referring_into(&self, s: usize, e: usize) -> Vec<usize> {
+        let mut ids: Vec<usize> = self.by_ref[s / BLOCK..=(e - 1) / BLOCK]
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    }
+}
+
 /// The repeated runs `[(frame, reference)]` that `maps` give the interval
 /// `s..e`: free frames outside it whose reference lies in it, each taken
-/// once, in runs of consecutive frames of at least `min` frames.
-fn images(maps: &[Map], label: &[Label], s: usize, e: usize, min: usize) -> Vec<Run> {
+/// once (the maps in order), in runs of consecutive frames of at least
+/// `min` frames.
+fn images(
+    maps: &[Map],
+    index: &MapIndex,
+    label: &[Label],
+    s: usize,
+    e: usize,
+    min: usize,
+) -> Vec<Run> {
     let mut taken = std::collections::HashSet::new();
     let mut runs: Vec<Run> = Vec::new();
-    for m in maps {
+    for m in index.referring_into(s, e).into_iter().map(|n| &maps[n]) {
         // References are non-decreasing: the frames referring into s..e
         // are one range.
-        if m.refs.is_empty() || m.refs[0] >= e || m.refs[m.refs.len() - 1] < s {
-            continue;
-        }
+        let first = m.refs.partition_point(|&x| x < s);
+        let last = m.refs.partition_point(|&x| x < e);
         let before = runs.len();
         let mut run: Vec<(usize, usize)> = Vec::new();
-        for (k, &x) in m.refs.iter().enumerate() {
+        for (k, &x) in m.refs.iter().enumerate().take(last).skip(first) {
             let y = m.start + k;
-            let ok = (s..e).contains(&x)
-                && !(s..e).contains(&y)
-                && label[y] == Label::Free
-                && !taken.contains(&y);
+            let ok = !(s..e).contains(&y) && label[y] == Label::Free && !taken.contains(&y);
             if ok {
                 run.push((y, x));
             } else if !run.is_empty() {
@@ -156,15 +203,62 @@ fn images(maps: &[Map], label: &[Label], s: usize, e: usize, min: usize) -> Vec<
     runs
 }
 
+/// A candidate primary clip's standing in the greedy search.
+#[derive(Clone, Copy)]
+enum Standing {
+    /// Overlaps a labelled frame: never a candidate again.
+    Out,
+    /// Its images changed since its gain was computed.
+    Stale,
+    /// Its gain (eq. 5), if it has repetitions worth the coding.
+    Gain(Option<f64>),
+}
+
+/// The gain (eq. 5) of taking `s..e` as a primary clip with `runs` as its
+/// repeated clips, if it is one.
+fn gain(f: &Features, s: usize, e: usize, runs: &[Run]) -> Option<f64> {
+    if runs.is_empty() {
+        return None;
+    }
+    let pri = primary_cost(f, s, e);
+    let original: f64 = pri
+        + runs
+            .iter()
+            .map(|r| primary_cost(f, r[0].0, r[r.len() - 1].0 + 1))
+            .sum::<f64>();
+    let improved: f64 = pri + runs.iter().map(|r| repeated_cost(f, r)).sum::<f64>();
+    let gain = original / improved.max(f64::MIN_POSITIVE);
+    (gain > 1.0).then_some(gain)
+}
+
 /// The clips of a take of `frames` source frames (see the module
 /// documentation).
+///
+/// The greedy search keeps every candidate's gain between rounds and
+/// recomputes only those whose images a round's labels touched (found
+/// through the maps near the labelled frames), so a long take costs time
+/// near-linear in its length; the result is the same as recomputing every
+/// gain every round.
 pub fn extract(f: &Features, paths: &[Path], p: &Params, frames: usize) -> Vec<Clip> {
+    extract_with(f, paths, p, frames, false)
+}
+
+/// [`extract`], recomputing every gain every round if `exhaustive` (the
+/// plain greedy search, which the tests hold the kept gains against).
+pub(super) fn extract_with(
+    f: &Features,
+    paths: &[Path],
+    p: &Params,
+    frames: usize,
+    exhaustive: bool,
+) -> Vec<Clip> {
     let len = f.len;
     let min = f.frames_of(p.min_clip_s);
     let maps: Vec<Map> = paths
         .iter()
         .flat_map(|path| [Map::of(path, false), Map::of(path, true)])
         .collect();
+    let index = MapIndex::new(&maps, len);
     let mut cuts: Vec<usize> = vec![0, len];
     for m in &maps {
         cuts.push(m.start);
@@ -174,40 +268,50 @@ pub fn extract(f: &Features, paths: &[Path], p: &Params, frames: usize) -> Vec<C
     cuts.dedup();
     // Candidate primaries: the intervals between neighbouring cuts, and
     // runs of up to SPAN of them (where paths are many, single intervals
-    // are shorter than the repetitions they could carry).
-    let intervals: Vec<(usize, usize)> = (0..cuts.len())
-        .flat_map(|a| {
-            let cuts = &cuts;
-            (a + 1..cuts.len().min(a + 1 + SPAN)).map(move |b| (cuts[a], cuts[b]))
+    // are shorter than the repetitions they could carry). Candidate
+    // `a * SPAN + (b − a − 1)` is `cuts[a]..cuts[b]`.
+    let candidate = |n: usize| {
+        let a = n / SPAN;
+        let b = a + 1 + n % SPAN;
+        (b < cuts.len()).then(|| (cuts[a], cuts[b]))
+    };
+    let count = cuts.len() * SPAN;
+    let mut standing: Vec<Standing> = (0..count)
+        .map(|n| match candidate(n) {
+            Some((s, e)) if e - s >= min => Standing::Stale,
+            _ => Standing::Out,
         })
         .collect();
+    // The candidates holding analysis frame `t`.
+    let holding = |t: usize| {
+        let k = cuts.partition_point(|&c| c <= t).saturating_sub(1);
+        (k.saturating_sub(SPAN - 1)..=k)
+            .flat_map(move |a| (k + 1..a + 1 + SPAN).map(move |b| a * SPAN + (b - a - 1)))
+    };
     let mut label = vec![Label::Free; len];
     let mut primaries = 0;
     loop {
-        let mut best: Option<(f64, usize, usize, Vec<Run>)> = None;
-        for &(s, e) in &intervals {
-            if e - s < min || label[s..e].iter().any(|&l| l != Label::Free) {
-                continue;
+        let mut best: Option<(f64, usize)> = None;
+        for (n, st) in standing.iter_mut().enumerate() {
+            if exhaustive && matches!(st, Standing::Gain(_)) {
+                *st = Standing::Stale;
             }
-            let runs = images(&maps, &label, s, e, min);
-            if runs.is_empty() {
-                continue;
+            if let Standing::Stale = st {
+                let (s, e) = candidate(n).unwrap_or((0, 0));
+                *st = Standing::Gain(gain(f, s, e, &images(&maps, &index, &label, s, e, min)));
             }
-            let pri = primary_cost(f, s, e);
-            let original: f64 = pri
-                + runs
-                    .iter()
-                    .map(|r| primary_cost(f, r[0].0, r[r.len() - 1].0 + 1))
-                    .sum::<f64>();
-            let improved: f64 = pri + runs.iter().map(|r| repeated_cost(f, r)).sum::<f64>();
-            let gain = original / improved.max(f64::MIN_POSITIVE);
-            if gain > 1.0 && best.as_ref().is_none_or(|b| gain > b.0) {
-                best = Some((gain, s, e, runs));
+            if let Standing::Gain(Some(g)) = *st {
+                if best.is_none_or(|b| g > b.0) {
+                    best = Some((g, n));
+                }
             }
         }
-        let Some((_, s, e, runs)) = best else {
+        let Some((_, n)) = best else {
             break;
         };
+        let (s, e) = candidate(n).unwrap_or((0, 0));
+        let runs = images(&maps, &index, &label, s, e, min);
+        let mut labelled: Vec<usize> = (s..e).collect();
         for l in &mut label[s..e] {
             *l = Label::Primary(primaries);
         }
@@ -215,6 +319,27 @@ pub fn extract(f: &Features, paths: &[Path], p: &Params, frames: usize) -> Vec<C
         for r in runs {
             for (y, x) in r {
                 label[y] = Label::Repeated(x);
+                labelled.push(y);
+            }
+        }
+        // The candidates holding a labelled frame are out; those whose
+        // images held one (a map's reference of it lies in them) are stale.
+        for &y in &labelled {
+            for m in index.by_frame[y / BLOCK].iter().map(|&m| &maps[m]) {
+                if (m.start..m.end()).contains(&y) {
+                    for c in holding(m.refs[y - m.start]) {
+                        if let Some(st @ Standing::Gain(_)) = standing.get_mut(c) {
+                            *st = Standing::Stale;
+                        }
+                    }
+                }
+            }
+        }
+        for &y in &labelled {
+            for c in holding(y) {
+                if let Some(st) = standing.get_mut(c) {
+                    *st = Standing::Out;
+                }
             }
         }
     }

@@ -193,7 +193,11 @@ fn bridge(mut paths: Vec<Path>, max: usize) -> Vec<Path> {
     while a < paths.len() {
         let (ia, ja) = paths[a].end();
         let mut best: Option<(usize, usize)> = None;
-        for (b, pb) in paths.iter().enumerate() {
+        // Paths stay sorted by start (a join keeps the head's): the
+        // candidates start at rows ia..=ia + max.
+        let from = paths.partition_point(|p| p.start().0 < ia);
+        let to = paths.partition_point(|p| p.start().0 <= ia + max);
+        for (b, pb) in paths.iter().enumerate().take(to).skip(from) {
             let (ib, jb) = pb.start();
             if b == a || ib < ia || jb < ja || (ib, jb) == (ia, ja) {
                 continue;

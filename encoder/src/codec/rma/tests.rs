@@ -154,3 +154,24 @@ fn tiny_and_still_takes() {
     let a = analyse(&m, &Params::default());
     check_cover(&a, 300);
 }
+
+#[test]
+fn kept_gains_find_what_the_plain_greedy_search_finds() {
+    // Two movements of different periods, a stretch of wander between
+    // them, and back: many rounds, candidates overlapping, stale gains.
+    let frames = 4800;
+    let m = motion(frames, 5, |f, c| match f {
+        0..1200 => periodic(f, c),
+        1200..2400 => periodic(f * 3 / 2, c + 2),
+        2400..3000 => wander(f, c),
+        _ => periodic(f, c),
+    });
+    let p = Params::default();
+    let features = features(&m, &p);
+    let paths = paths::find(&features, &p);
+    assert!(paths.len() > 10, "{} paths", paths.len());
+    let kept = clips::extract_with(&features, &paths, &p, frames, false);
+    let plain = clips::extract_with(&features, &paths, &p, frames, true);
+    assert!(kept.len() > 5, "{} clips", kept.len());
+    assert_eq!(kept, plain);
+}
