@@ -94,14 +94,11 @@ pub fn find(f: &Features, p: &Params) -> Vec<Path> {
     }
     let band = Band::new(f, gap, width);
     // 1. The threshold: a quantile of the band's finite distances.
-    let mut finite: Vec<f32> = band.d.iter().copied().filter(|v| v.is_finite()).collect();
-    if finite.is_empty() {
+    let Some(threshold) = quantile(&band.d, p.threshold_quantile) else {
         return Vec::new();
-    }
-    let q = ((finite.len() - 1) as f64 * p.threshold_quantile) as usize;
-    let (_, &mut threshold, _) = finite.select_nth_unstable_by(q, f32::total_cmp);
-    drop(finite);
-    // 2. Labels: bit 0 a minimum along i, bit 1 along j (both: 2-D).
+    };
+    // 2. Labels: bit 0 a minimum along i, bit 1 along j (both: 2-D);
+    // USED once on a path.
     let mut label = vec![0u8; band.d.len()];
     let mut seeds = Vec::new();
     for i in 0..band.len {
@@ -123,16 +120,15 @@ pub fn find(f: &Features, p: &Params) -> Vec<Path> {
     }
     seeds.sort_by(|a, b| a.0.total_cmp(&b.0).then((a.1, a.2).cmp(&(b.1, b.2))));
     // 3. Grow a path both ways from every 2-D minimum not yet on one.
-    let mut used = vec![false; band.d.len()];
     let mut paths = Vec::new();
     for &(_, i, j) in &seeds {
         let k = band.at(i, j).unwrap_or(0);
-        if used[k] {
+        if label[k] & USED != 0 {
             continue;
         }
-        used[k] = true;
-        let forward = grow(&band, &label, &mut used, (i, j), 1);
-        let backward = grow(&band, &label, &mut used, (i, j), -1);
+        label[k] |= USED;
+        let forward = grow(&band, &mut label, (i, j), 1);
+        let backward = grow(&band, &mut label, (i, j), -1);
         let mut points: Vec<(usize, usize)> = backward.into_iter().rev().collect();
         points.push((i, j));
         points.extend(forward);
@@ -146,15 +142,45 @@ pub fn find(f: &Features, p: &Params) -> Vec<Path> {
         .collect()
 }
 
+/// The `q` quantile of the finite values of `d` (non-negative), the
+/// `⌊(n − 1) q⌋`-th smallest: selected by two counting passes over the
+/// values' bits (non-negative floats order as their bit patterns), high
+/// half then low half, so the band is not copied.
+fn quantile(d: &[f32], q: f64) -> Option<f32> {
+    let finite = || d.iter().filter(|v| v.is_finite()).map(|v| v.to_bits());
+    let n = finite().count();
+    let mut rank = (n.checked_sub(1)? as f64 * q) as usize;
+    let mut counts = vec![0usize; 1 << 16];
+    for b in finite() {
+        counts[(b >> 16) as usize] += 1;
+    }
+    let high = pick(&counts, &mut rank);
+    counts.fill(0);
+    for b in finite().filter(|b| b >> 16 == high) {
+        counts[(b & 0xffff) as usize] += 1;
+    }
+    let low = pick(&counts, &mut rank);
+    Some(f32::from_bits(high << 16 | low))
+}
+
+/// The bucket holding the `rank`-th value of `counts`; `rank` becomes the
+/// rank within it.
+fn pick(counts: &[usize], rank: &mut usize) -> u32 {
+    for (bucket, &c) in counts.iter().enumerate() {
+        if *rank < c {
+            return bucket as u32;
+        }
+        *rank -= c;
+    }
+    0
+}
+
+/// A pixel's label bit: on a path.
+const USED: u8 = 4;
+
 /// The pixels from `from` (excluded) following the cheapest labelled,
 /// unused neighbour in direction `dir` (+1: lower right, −1: upper left).
-fn grow(
-    band: &Band,
-    label: &[u8],
-    used: &mut [bool],
-    from: (usize, usize),
-    dir: isize,
-) -> Vec<(usize, usize)> {
+fn grow(band: &Band, label: &mut [u8], from: (usize, usize), dir: isize) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let (mut i, mut j) = (from.0 as isize, from.1 as isize);
     loop {
@@ -167,7 +193,7 @@ fn grow(
             let Some(k) = band.at(ni as usize, nj as usize) else {
                 continue;
             };
-            if label[k] == 0 || used[k] {
+            if label[k] & 3 == 0 || label[k] & USED != 0 {
                 continue;
             }
             let v = band.d[k];
@@ -178,7 +204,7 @@ fn grow(
         let Some((_, ni, nj, k)) = best else {
             return out;
         };
-        used[k] = true;
+        label[k] |= USED;
         (i, j) = (ni, nj);
         out.push((i as usize, j as usize));
     }
@@ -233,4 +259,34 @@ fn bridge(mut paths: Vec<Path>, max: usize) -> Vec<Path> {
         paths[a].points.extend(tail.points);
     }
     paths
+}
+
+#[cfg(test)]
+mod tests {
+    use super::quantile;
+
+    #[test]
+    fn quantile_is_the_selected_value() {
+        let mut x = 12345u64;
+        let mut d: Vec<f32> = (0..5000)
+            .map(|i| {
+                x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+                match i % 7 {
+                    0 => f32::INFINITY,
+                    1 => 0.0,
+                    2 => 3.5,
+                    _ => (x >> 40) as f32 / 1000.0,
+                }
+            })
+            .collect();
+        for q in [0.0, 0.02, 0.15, 0.5, 0.999, 1.0] {
+            let mut finite: Vec<f32> = d.iter().copied().filter(|v| v.is_finite()).collect();
+            let k = ((finite.len() - 1) as f64 * q) as usize;
+            let (_, &mut want, _) = finite.select_nth_unstable_by(k, f32::total_cmp);
+            assert_eq!(quantile(&d, q), Some(want), "q {q}");
+        }
+        d.retain(|v| !v.is_finite());
+        assert_eq!(quantile(&d, 0.5), None);
+        assert_eq!(quantile(&[], 0.5), None);
+    }
 }
