@@ -46,6 +46,15 @@ const BOARDS: &[(&str, &str, &[&str])] = &[
             "thumbv6m-none-eabi",
         ],
     ),
+    (
+        "board-riscv-virt",
+        "memory/riscv-virt.x",
+        &[
+            "riscv32imc-unknown-none-elf",
+            "riscv32imac-unknown-none-elf",
+            "riscv32i-unknown-none-elf",
+        ],
+    ),
 ];
 
 const DEFAULT_CLIP: &str = "clips/demo.mcb";
@@ -78,7 +87,7 @@ fn main() {
         [one] => **one,
         [] => fail(
             "mocap-firmware: no board selected. Enable exactly one of the features \
-             board-lm3s6965 (default), board-microbit, board-mps2-an386.",
+             board-lm3s6965 (default), board-microbit, board-mps2-an386, board-riscv-virt.",
         ),
         many => fail(&format!(
             "mocap-firmware: several boards selected ({}). Use --no-default-features \

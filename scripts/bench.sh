@@ -142,7 +142,7 @@ for board in $(mocap_boards); do
     echo "| $core | $board | $(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\).*/\1/p' "$out/uart-$board.txt") | $((pc / 100)).$(printf %02d $((pc % 100))) | $(get parse_instructions) | $(get player_new_instructions) | $(get stack_bytes_used) | $(get state_bytes) |"
 done
 echo
-# Per-pose decode cost of one clip on three cores, frames and 50 Hz sample_at.
+# Per-pose decode cost of one clip on every board's core, frames and 50 Hz sample_at.
 pose_cost_table() {
     local clip=$1 tag=$2
     echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | stack used B |"

@@ -6,8 +6,10 @@ MOCAP_BOARD_TABLE='
 microbit    M0    thumbv6m-none-eabi      -machine microbit                 memory/microbit.x
 lm3s6965    M3    thumbv7m-none-eabi      -machine lm3s6965evb -cpu cortex-m3 ../memory.x
 mps2-an386  M4F   thumbv7em-none-eabihf   -machine mps2-an386               memory/mps2-an386.x
+riscv-virt  RV32  riscv32imc-unknown-none-elf -machine virt -bios none      memory/riscv-virt.x
 '
-# Order: smallest core first (the order of the benchmark tables). The default board:
+# Order: the Cortex-M cores smallest first (the order of the benchmark tables), then the other
+# ISA (RISC-V, so "bit-exact everywhere" covers a second instruction set). The default board:
 MOCAP_DEFAULT_BOARD=lm3s6965
 
 # mocap_boards: the board names, one per line.
@@ -33,11 +35,24 @@ _mocap_board_field() {
     awk "$2" <<<"$row"
 }
 
-# mocap_board_core BOARD: M0, M3, M4F.
+# mocap_board_core BOARD: M0, M3, M4F, RV32.
 mocap_board_core() { _mocap_board_field "$1" '{ print $2 }'; }
 # mocap_board_target BOARD: the Rust target.
 mocap_board_target() { _mocap_board_field "$1" '{ print $3 }'; }
-# mocap_board_qemu_args BOARD: qemu-system-arm's machine arguments.
+# mocap_board_qemu BOARD: the QEMU system emulator of the board's ISA.
+mocap_board_qemu() {
+    local target
+    target="$(mocap_board_target "$1")" || return
+    mocap_target_qemu "$target"
+}
+# mocap_target_qemu TARGET: the QEMU system emulator for a Rust target.
+mocap_target_qemu() {
+    case "$1" in
+        riscv32*) printf 'qemu-system-riscv32\n' ;;
+        *) printf 'qemu-system-arm\n' ;;
+    esac
+}
+# mocap_board_qemu_args BOARD: the emulator's machine arguments.
 mocap_board_qemu_args() {
     _mocap_board_field "$1" '{ s = ""; for (i = 4; i < NF; i++) s = s (s == "" ? "" : " ") $i; print s }'
 }

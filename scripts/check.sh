@@ -131,18 +131,49 @@ panic_call_sites() {
     local elf="$1" dis
     dis="$(mktemp)"
     llvm-objdump -d -C --no-show-raw-insn "$elf" >"$dis"
+    # Two passes over the listing: the first maps function addresses to names (RISC-V calls are
+    # `auipc REG, HI` + `jalr/jr LO(REG)` pairs that ld.lld leaves unrelaxed and llvm-objdump
+    # does not resolve), the second finds the calls.
     awk -v re="$PANIC_RE" '
-        /^[0-9a-f]+ <.*>:$/ {
-            name = $0; sub(/^[0-9a-f]+ </, "", name); sub(/>:$/, "", name)
-            if (name !~ /^\$[dt]/) fn = name
+        function hex(s,   i, n) {
+            n = 0; s = tolower(s)
+            for (i = 1; i <= length(s); i++) n = n * 16 + index("0123456789abcdef", substr(s, i, 1)) - 1
+            return n
+        }
+        FNR == NR {
+            if (/^[0-9a-f]+ <.*>:$/) {
+                name = $0; sub(/^[0-9a-f]+ </, "", name); sub(/>:$/, "", name)
+                at[sprintf("%.0f", hex($1))] = name
+            }
             next
         }
-        # Any instruction naming a panic symbol: bl, b.w, conditional tail branches (bhs.w), ...
-        /^ *[0-9a-f]+:[ \t]/ && match($0, /\t0x[0-9a-f]+ <.*>/) {
+        /^[0-9a-f]+ <.*>:$/ {
+            name = $0; sub(/^[0-9a-f]+ </, "", name); sub(/>:$/, "", name)
+            if (name !~ /^(\$[dtx]|\.L)/) fn = name
+            next
+        }
+        # Any instruction naming a panic symbol: bl, b.w, conditional tail branches (bhs.w), jal, ...
+        /^ *[0-9a-f]+:[ \t]/ && match($0, /[\t ]0x[0-9a-f]+ <.*>/) {
             t = substr($0, RSTART + 1); sub(/^0x[0-9a-f]+ </, "", t)
             sub(/>[ \t]*(@.*)?$/, "", t); sub(/\+0x[0-9a-f]+$/, "", t)
             if (t ~ re && fn !~ re) { a = $1; sub(/:$/, "", a); print a "\t" t }
-        }' "$dis" | sort -u | while IFS=$'\t' read -r addr sym; do
+            next
+        }
+        # RISC-V: auipc REG, HI sets REG = pc + HI * 4096; jalr/jr LO(REG) jumps to REG + LO.
+        /^ *[0-9a-f]+:[ \t]/ && $2 == "auipc" {
+            r = $3; sub(/,$/, "", r); pc = $1; sub(/:$/, "", pc)
+            hi[r] = (hex(pc) + $4 * 4096) % 4294967296
+            next
+        }
+        /^ *[0-9a-f]+:[ \t]/ && ($2 == "jalr" || $2 == "jr") && match($NF, /^-?[0-9]+\([a-z0-9]+\)$/) {
+            off = $NF; sub(/\(.*/, "", off); r = $NF; sub(/.*\(/, "", r); sub(/\)/, "", r)
+            if (r in hi) {
+                dest = sprintf("%.0f", (hi[r] + off) % 4294967296)
+                t = (dest in at) ? at[dest] : ""
+                if (t ~ re && fn !~ re) { a = $1; sub(/:$/, "", a); print a "\t" t }
+            }
+            next
+        }' "$dis" "$dis" | sort -u | while IFS=$'\t' read -r addr sym; do
         local chain origin="" loc="" fnname file
         chain="$(llvm-symbolizer --inlining -C -e "$elf" "0x$addr")"
         # Pairs of lines: function, file:line:col (innermost first).

@@ -48,7 +48,8 @@
 # Exit codes: 0 success; 1 the firmware reported a failure (run); 2 usage error or missing clip;
 # 3 toolchain or build failure; 124 QEMU timed out.
 #
-# Boards (scripts/boards.sh): lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F).
+# Boards (scripts/boards.sh): lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F),
+# riscv-virt (QEMU virt, RV32IMC).
 # Clip: default firmware-example/clips/demo.mcb.
 # Toolchain: scripts/toolchain.sh (rustup target if installed, else Debian's -Zbuild-std route);
 # it installs missing packages itself (apt-get, root or sudo). Build/toolchain chatter goes to
@@ -221,7 +222,7 @@ run_qemu() {
     [ "$ICOUNT" -eq 1 ] && qemu_args+=(-icount shift=0)
     # No monitor, no display; UART0 (serial0) on stdout, its receiver fed from --input (stdin
     # of QEMU; /dev/null by default, never the caller's terminal).
-    timeout -k 10 "$TIMEOUT" qemu-system-arm "${qemu_args[@]}" \
+    timeout -k 10 "$TIMEOUT" "$(mocap_board_qemu "$BOARD")" "${qemu_args[@]}" \
         -display none -monitor none -serial stdio \
         -semihosting-config enable=on,target=native \
         -kernel "$elf" <"$INPUT" || rc=$?

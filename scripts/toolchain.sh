@@ -2,7 +2,7 @@
 # Cross toolchain for the Cortex-M firmware (firmware-example/) and QEMU.
 #
 #   source scripts/toolchain.sh            # defines the functions below, installs nothing yet
-#   mocap_toolchain_setup [TARGET...]      # ensure everything for these targets (default: all three)
+#   mocap_toolchain_setup [TARGET...]      # ensure everything for these targets (default: every board's)
 #   mocap_cargo TARGET ARGS...             # run cargo for TARGET the way this machine can:
 #                                          #   mocap_cargo thumbv7m-none-eabi build --release
 #   mocap_toolchain_summary                # print what was chosen
@@ -16,11 +16,12 @@
 # Route per target, decided once by mocap_toolchain_setup:
 #   rustup  - `rustup target list --installed` has the target: plain `cargo ... --target T`.
 #             This is the ordinary way; on a machine with network run
-#             `rustup target add thumbv6m-none-eabi thumbv7m-none-eabi thumbv7em-none-eabihf`.
+#             `rustup target add thumbv6m-none-eabi thumbv7m-none-eabi thumbv7em-none-eabihf riscv32imc-unknown-none-elf`.
 #   debian  - otherwise: Debian's matching rustc-web + cargo-web + rust-web-src, building `core`
 #             from source: RUSTC_BOOTSTRAP=1 RUSTC=/usr/bin/rustc /usr/bin/cargo -Zbuild-std=core,
 #             linked with ld.lld (Debian's lld).
-# Always needed: qemu-system-arm (package qemu-system-arm). ld.lld (package lld) for the debian route,
+# Always needed: qemu-system-arm (package qemu-system-arm); for RISC-V targets qemu-system-riscv32
+# (package qemu-system-misc). ld.lld (package lld) for the debian route,
 # and for `mocap_cargo TARGET clippy` Debian's clippy of the same rustc (package rust-web-clippy).
 #
 # Packages are installed with apt-get (as root, or through sudo), `apt-get update` only when
@@ -177,14 +178,20 @@ mocap_toolchain_setup() {
         _mocap_log "$t: route $route"
     done
 
-    local pkgs=(qemu-system-arm)
+    # The emulators of the targets' ISAs (Debian packs qemu-system-riscv32 in qemu-system-misc).
+    local pkgs=(qemu-system-arm) qemus=(qemu-system-arm) q
+    for t in "${targets[@]}"; do
+        case "$t" in riscv32*) pkgs+=(qemu-system-misc); qemus+=(qemu-system-riscv32) ;; esac
+    done
     [ "$need_debian" -eq 1 ] && pkgs+=(rustc-web cargo-web rust-web-src lld)
     mocap_ensure_packages "${pkgs[@]}" || return 1
 
-    if ! command -v qemu-system-arm >/dev/null 2>&1; then
-        _mocap_err "qemu-system-arm is not on PATH even though its package is installed"
-        return 1
-    fi
+    for q in "${qemus[@]}"; do
+        if ! command -v "$q" >/dev/null 2>&1; then
+            _mocap_err "$q is not on PATH even though its package is installed"
+            return 1
+        fi
+    done
     if [ "$need_debian" -eq 1 ]; then
         local f
         for f in "$MOCAP_DEBIAN_RUSTC" "$MOCAP_DEBIAN_CARGO"; do
@@ -284,7 +291,7 @@ if [ "${BASH_SOURCE[0]}" = "$0" ]; then
     for arg in "$@"; do
         case "$arg" in
             -h|--help) sed -n '2,/^$/p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-            thumb*) ;;
+            thumb*|riscv32*) ;;
             *) printf 'toolchain: unknown argument %s (expected targets: %s)\n' "$arg" "$MOCAP_FW_TARGETS" >&2; exit 2 ;;
         esac
     done

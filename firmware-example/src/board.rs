@@ -10,12 +10,14 @@
 
 use core::ptr::{read_volatile, write_volatile};
 
+#[cfg_attr(feature = "board-riscv-virt", allow(dead_code))] // byte-wide registers there
 #[inline(always)]
 fn write_reg(addr: usize, value: u32) {
     // SAFETY: callers pass addresses of this board's memory-mapped UART/clock registers.
     unsafe { write_volatile(addr as *mut u32, value) }
 }
 
+#[cfg_attr(feature = "board-riscv-virt", allow(dead_code))]
 #[inline(always)]
 fn read_reg(addr: usize) -> u32 {
     // SAFETY: as for `write_reg`.
@@ -227,8 +229,73 @@ mod imp {
 #[cfg(not(any(
     feature = "board-lm3s6965",
     feature = "board-microbit",
-    feature = "board-mps2-an386"
+    feature = "board-mps2-an386",
+    feature = "board-riscv-virt"
 )))]
-compile_error!("enable one board feature: board-lm3s6965, board-microbit or board-mps2-an386");
+compile_error!(
+    "enable one board feature: board-lm3s6965, board-microbit, board-mps2-an386 or board-riscv-virt"
+);
+
+#[cfg(feature = "board-riscv-virt")]
+mod imp {
+    //! QEMU `virt` (riscv32): UART0 is an NS16550A at 0x1000_0000 with byte-wide registers.
+    use core::ptr::{read_volatile, write_volatile};
+
+    pub const NAME: &str = "riscv-virt";
+
+    const UART0: usize = 0x1000_0000;
+    const RBR_THR: usize = UART0; // receive buffer / transmit holding (DLAB = 0)
+    const IER: usize = UART0 + 1;
+    const FCR: usize = UART0 + 2;
+    const LCR: usize = UART0 + 3;
+    const LSR: usize = UART0 + 5;
+    const LSR_DATA_READY: u8 = 1;
+    const LSR_THR_EMPTY: u8 = 1 << 5;
+
+    pub const CLIP_BUFFER_BYTES: usize = 32 * 1024;
+    /// The tick counter is the CLINT's `mtime` (src/arch/riscv.rs), 10 MHz on `virt`.
+    pub const SYSTICK_HZ: u32 = 10_000_000;
+
+    #[inline(always)]
+    fn write8(addr: usize, value: u8) {
+        // SAFETY: addresses of the virt machine's UART registers.
+        unsafe { write_volatile(addr as *mut u8, value) }
+    }
+
+    #[inline(always)]
+    fn read8(addr: usize) -> u8 {
+        // SAFETY: as for `write8`.
+        unsafe { read_volatile(addr as *const u8) }
+    }
+
+    pub fn read_byte() -> Option<u8> {
+        if read8(LSR) & LSR_DATA_READY == 0 {
+            return None;
+        }
+        Some(read8(RBR_THR))
+    }
+
+    pub struct Uart(());
+
+    impl Uart {
+        pub fn init() -> Self {
+            write8(IER, 0); // polled
+            write8(LCR, 0b11); // 8N1, DLAB = 0 (QEMU ignores the divisor)
+            write8(FCR, 1); // FIFOs on
+            Uart(())
+        }
+
+        pub fn steal() -> Self {
+            Uart(())
+        }
+    }
+
+    impl super::Write for Uart {
+        fn write_byte(&mut self, byte: u8) {
+            while read8(LSR) & LSR_THR_EMPTY == 0 {}
+            write8(RBR_THR, byte);
+        }
+    }
+}
 
 pub use imp::{Uart, CLIP_BUFFER_BYTES, NAME, SYSTICK_HZ};

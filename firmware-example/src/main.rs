@@ -11,6 +11,10 @@
 #![no_std]
 #![no_main]
 
+// The core: Cortex-M or RISC-V.
+#[cfg_attr(target_arch = "arm", path = "arch/cortex_m.rs")]
+#[cfg_attr(target_arch = "riscv32", path = "arch/riscv.rs")]
+mod arch;
 mod board;
 mod entropy_bench;
 mod servo;
@@ -20,11 +24,9 @@ mod text;
 
 use core::mem::size_of;
 
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
-use cortex_m_rt::{entry, exception, ExceptionFrame};
-use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use mocap_decoder::{Clip, Error, Player};
 
+use arch::{exit, ticks};
 use board::Uart;
 use text::Text;
 
@@ -83,59 +85,14 @@ mod decoder_glue {
     }
 }
 
-/// SysTick as a free-running 24-bit down-counter clocked by the core.
-///
-/// Under `qemu -icount shift=0` every instruction advances virtual time by 1 ns, so ticks are
-/// exactly proportional to instructions (ticks per instruction = core clock / 1 GHz).
-/// [`calibrate`] measures that ratio with a loop of known length.
-mod ticks {
-    use super::{SystClkSource, SYST};
-
-    const MASK: u32 = 0x00FF_FFFF;
-
-    pub fn start(syst: &mut SYST) {
-        syst.disable_interrupt();
-        syst.set_clock_source(SystClkSource::Core);
-        syst.set_reload(MASK);
-        syst.clear_current();
-        syst.enable_counter();
-    }
-
-    #[inline(always)]
-    pub fn now() -> u32 {
-        SYST::get_current()
-    }
-
-    /// Ticks from `earlier` to `later` (one wrap at most: callers keep spans under 2^24 ticks).
-    #[inline(always)]
-    pub fn since(earlier: u32, later: u32) -> u32 {
-        earlier.wrapping_sub(later) & MASK
-    }
-}
-
-/// Instructions executed by [`spin`] in the calibration (2 per iteration).
+/// Instructions executed by [`arch::spin`] in the calibration (2 per iteration).
 const CALIBRATION_INSTRUCTIONS: u32 = 2 * CALIBRATION_ITERATIONS;
 const CALIBRATION_ITERATIONS: u32 = 1_000_000;
-
-/// Exactly two instructions per iteration: `subs`, `bne`.
-#[inline(never)]
-fn spin(iterations: u32) {
-    // SAFETY: register-only loop; touches no memory and no stack.
-    unsafe {
-        core::arch::asm!(
-            "2:",
-            "subs r0, #1",
-            "bne 2b",
-            inout("r0") iterations => _,
-            options(nomem, nostack),
-        );
-    }
-}
 
 /// Ticks that [`CALIBRATION_INSTRUCTIONS`] instructions take.
 fn calibrate() -> u32 {
     let t0 = ticks::now();
-    spin(CALIBRATION_ITERATIONS);
+    arch::spin(CALIBRATION_ITERATIONS);
     ticks::since(t0, ticks::now())
 }
 
@@ -156,8 +113,9 @@ mod stack {
     const PAINT: u32 = 0xA5C3_5A3C;
 
     extern "C" {
-        static __sheap: u32; // cortex-m-rt: first free word after .bss/.uninit
-        static _stack_start: u32; // cortex-m-rt: initial stack pointer (top of RAM)
+        // cortex-m-rt and riscv-rt alike:
+        static __sheap: u32; // first free word after .bss/.uninit
+        static _stack_start: u32; // initial stack pointer (top of RAM)
     }
 
     #[allow(unused_unsafe)] // taking the address of an extern static became safe in Rust 1.82
@@ -174,9 +132,7 @@ mod stack {
 
     #[inline(never)]
     pub fn paint() {
-        let sp: usize;
-        // SAFETY: reads the stack pointer.
-        unsafe { core::arch::asm!("mov {}, sp", out(reg) sp, options(nomem, nostack)) };
+        let sp = crate::arch::stack_pointer();
         // Leave a margin below this function's frame.
         let end = sp.saturating_sub(64) & !3;
         let mut p = bottom();
@@ -521,23 +477,14 @@ impl core::fmt::Write for FmtAdapter<'_> {
     }
 }
 
-fn exit(success: bool) -> ! {
-    debug::exit(if success { EXIT_SUCCESS } else { EXIT_FAILURE });
-    // Reached only when no debugger/emulator handles the semihosting call.
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[entry]
+#[arch::entry]
 fn main() -> ! {
     stack::paint();
     let mut text = Text(Uart::init());
-    let Some(mut core) = cortex_m::Peripherals::take() else {
+    if !ticks::start() {
         text.str("# error peripherals already taken\n");
         exit(false);
-    };
-    ticks::start(&mut core.SYST);
+    }
 
     if ENTROPY_BENCH {
         let ok = entropy_bench::run(&mut text);
@@ -559,14 +506,5 @@ fn main() -> ! {
 fn panic(_: &core::panic::PanicInfo) -> ! {
     let mut text = Text(Uart::steal());
     text.str("\n# error panic\n# end\n");
-    exit(false)
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    let mut text = Text(Uart::steal());
-    text.str("\n# error hardfault")
-        .kv("pc", u64::from(frame.pc()))
-        .str("\n# end\n");
     exit(false)
 }

@@ -171,20 +171,27 @@ pub fn exercise_decoder(bytes: &[u8]) -> Result<u64, mocap_decoder::Error> {
     Ok(sum)
 }
 
-/// Whether `qemu-system-arm` runs; without it a test prints SKIPPED and
-/// returns, except under `CI`, where a missing emulator fails it.
+/// Whether the emulators of the boards (`qemu-system-arm`, and
+/// `qemu-system-riscv32` for the RISC-V board) run; without them a test
+/// prints SKIPPED and returns, except under `CI`, where a missing emulator
+/// fails it.
 pub fn qemu_available() -> bool {
-    let ok = std::process::Command::new("qemu-system-arm")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        if std::env::var_os("CI").is_some() {
-            panic!("qemu-system-arm missing in CI: run the README's test command");
+    for qemu in ["qemu-system-arm", "qemu-system-riscv32"] {
+        let ok = std::process::Command::new(qemu)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !ok {
+            if std::env::var_os("CI").is_some() {
+                panic!("{qemu} missing in CI: run the README's test command");
+            }
+            skipped(&format!(
+                "{qemu} not found (run scripts/test.sh, which installs it)"
+            ));
+            return false;
         }
-        skipped("qemu-system-arm not found (run scripts/test.sh, which installs it)");
     }
-    ok
+    true
 }
 
 /// `scripts/firmware.sh run --board <board> --clip <clip> <args…>`: whether

@@ -54,7 +54,7 @@ fn host_lines(clip: &Clip<'_>, policy: Policy) -> (String, mocap_encoder::play::
 }
 
 #[test]
-fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_three_cores() {
+fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_every_core() {
     if !qemu_available() {
         return;
     }
@@ -145,7 +145,7 @@ fn a_clip_for_a_wider_rig_is_refused_or_clamped_by_the_figure_on_three_cores() {
 /// it (`identity=other_digest`); `clamp-if-inside` plays it, every servo being inside the
 /// figure's limits, byte-identical to `mocap play --rig` (which compares the same way).
 #[test]
-fn a_clip_with_the_figures_table_but_another_digest_follows_the_policy_on_three_cores() {
+fn a_clip_with_the_figures_table_but_another_digest_follows_the_policy_on_every_core() {
     if !qemu_available() {
         return;
     }
@@ -199,7 +199,7 @@ fn a_clip_with_the_figures_table_but_another_digest_follows_the_policy_on_three_
 /// figure's pulse ranges and speed limits, ending at its neutrals, in at most the documented
 /// number of ticks (`Playback::park_ticks_max`), and says `# fault=estop park_ticks=N`.
 #[test]
-fn the_estop_brings_every_servo_to_rest_on_three_cores() {
+fn the_estop_brings_every_servo_to_rest_on_every_core() {
     use mocap_servo::{HardLimits, HardStep, Playback};
     if !qemu_available() {
         return;

@@ -1,5 +1,5 @@
 //! The firmware example decodes clips on Cortex-M0 (microbit), M3
-//! (lm3s6965evb) and M4F (mps2-an386) in QEMU; its UART output must be
+//! (lm3s6965evb), M4F (mps2-an386) and RISC-V RV32IMC (virt) in QEMU; its UART output must be
 //! byte-identical to the host decoder's (firmware-example/README.md gives the
 //! format; `#` lines carry statistics and are not compared). Index clips are
 //! played frame by frame; pca-spline clips frame by frame and also in the
@@ -111,7 +111,7 @@ fn check_codec(
 }
 
 #[test]
-fn firmware_output_matches_host_on_three_cores() {
+fn firmware_output_matches_host_on_every_core() {
     if !qemu_available() {
         return;
     }
@@ -140,7 +140,7 @@ fn check_frames_and_samples(name: &str, m: &Motion, codec: CodecChoice, bound: &
 }
 
 #[test]
-fn pca_spline_firmware_output_matches_host_on_three_cores() {
+fn pca_spline_firmware_output_matches_host_on_every_core() {
     if !qemu_available() {
         return;
     }
@@ -155,7 +155,7 @@ fn pca_spline_firmware_output_matches_host_on_three_cores() {
 /// state carried from frame to frame), and a predictive servo clip played
 /// in servo mode against `mocap play`.
 #[test]
-fn predictive_firmware_output_matches_host_on_three_cores() {
+fn predictive_firmware_output_matches_host_on_every_core() {
     use mocap_encoder::play::Protocol;
     if !qemu_available() {
         return;
@@ -180,7 +180,7 @@ fn predictive_firmware_output_matches_host_on_three_cores() {
 /// firmware at 50 Hz through the rig mapping and the limiter must send the
 /// same Pololu Maestro bytes and SSC-32 text as `mocap play`.
 #[test]
-fn servo_clip_commands_match_host_on_three_cores() {
+fn servo_clip_commands_match_host_on_every_core() {
     use mocap_encoder::play::Protocol;
     if !qemu_available() {
         return;
@@ -306,7 +306,7 @@ fn pca9685_lines(pulses: &[Vec<u16>], outputs: &[u16]) -> String {
 /// neither, so the firmware drives recording devices and prints a line per
 /// tick; the host drives the same outputs with `mocap play`'s pulses.
 #[test]
-fn servo_clip_pwm_and_pca9685_match_host_on_three_cores() {
+fn servo_clip_pwm_and_pca9685_match_host_on_every_core() {
     use mocap_encoder::play::{servo_clip_stream_on, Policy, Protocol};
     if !qemu_available() {
         return;

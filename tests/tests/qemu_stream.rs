@@ -485,7 +485,7 @@ fn expected_pose_run(received: &[Received], figure: &Figure) -> (String, [u64; 3
 fn clip_buffer_bytes(board: &str) -> usize {
     match board {
         "microbit" => 6 * 1024,
-        "lm3s6965" => 32 * 1024,
+        "lm3s6965" | "riscv-virt" => 32 * 1024,
         _ => 64 * 1024,
     }
 }
