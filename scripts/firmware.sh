@@ -268,6 +268,12 @@ size_report() {
     else
         die "neither llvm-size (package llvm) nor readelf (package binutils) is available"
     fi
+    # riscv-rt's `.heap` and `.stack` are NOBITS sections that only mark the free RAM (up to the
+    # top of RAM): not static RAM, as cortex-m-rt's layout has none. Both tools list sections
+    # with -A (name, size in decimal).
+    local reserved
+    reserved="$("${size_tool:-size}" -A "$elf" 2>/dev/null | awk '$1 == ".stack" || $1 == ".heap" { s += $2 } END { print s + 0 }')"
+    bss=$((bss - reserved))
     printf 'board=%s target=%s\n' "$BOARD" "$TARGET"
     printf 'text=%s\ndata=%s\nbss=%s\n' "$text" "$data" "$bss"
     printf 'flash_bytes=%s\nram_static_bytes=%s\n' "$((text + data))" "$((data + bss))"
