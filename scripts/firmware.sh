@@ -42,7 +42,7 @@
 #       into the decoder, where LTO inlines it), core_fmt_code_bytes (error messages only),
 #       firmware_own_code_bytes. Stack use is printed by `run` (# stack_bytes_used=).
 #   scripts/firmware.sh boards
-#       Lists the boards (the table in scripts/boards.sh): name, core, Rust target, QEMU machine,
+#       Lists the boards (the table in scripts/boards.sh): name, core, Rust target, emulator, its machine arguments,
 #       memory map.
 #
 # Exit codes: 0 success; 1 the firmware reported a failure (run); 2 usage error or missing clip;
@@ -129,7 +129,7 @@ case "$CMD" in
     build|run|size) ;;
     boards)
         for b in $(mocap_boards); do
-            printf '%-11s %-4s %-22s %-36s %s\n' "$b" "$(mocap_board_core "$b")" "$(mocap_board_target "$b")" \
+            printf '%-11s %-4s %-28s %-20s %-36s %s\n' "$b" "$(mocap_board_core "$b")" "$(mocap_board_target "$b")" "$(mocap_board_qemu "$b")" \
                 "$(mocap_board_qemu_args "$b")" "$(mocap_board_memory "$b")"
         done
         exit 0 ;;
