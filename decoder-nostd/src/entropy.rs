@@ -8,6 +8,9 @@
 //! symbol is a mask, a scan of the fixed-width counts from symbol 0 (symbol
 //! 0's count is kept by the table: the most frequent value of a zigzag
 //! residual costs one compare), a multiply-add and at most two byte reads.
+//! For wide alphabets a caller with `2A + 2` bytes of RAM to spare builds
+//! the cumulative counts once ([`Table::index`]) and decodes with
+//! [`Decoder::symbol_in`]: a binary search, the same symbols and states.
 //! No division, no loop without a bound, no panic on any input: a stream
 //! that does not come from the encoder decodes to garbage symbols, never
 //! out of bounds.
@@ -138,6 +141,37 @@ impl<'a> Table<'a> {
         }
     }
 
+    /// The cumulative counts of the table written into `buf` (the caller's
+    /// RAM, `A + 1` entries: `2A + 2` bytes), for [`Decoder::symbol_in`]:
+    /// a binary search instead of the scan, for wide alphabets (the scan
+    /// costs about 15 instructions per symbol it passes; the search about
+    /// as much per halving). `EntropyTable` if `buf` is shorter than `A + 1`.
+    pub fn index<'c>(&self, buf: &'c mut [u16]) -> Result<Index<'c>, Error> {
+        let a = self.alphabet as usize;
+        let cum = buf
+            .get_mut(..a.wrapping_add(1))
+            .ok_or(malformed("index buffer shorter than the alphabet + 1"))?;
+        let mut scan = self.after0;
+        let mut at = 0u32;
+        let last = self.alphabet.wrapping_sub(1);
+        for (s, c) in (0u32..).zip(cum.iter_mut()) {
+            // M ≤ 2^15: every cumulative count fits 16 bits.
+            *c = at as u16;
+            let f = match s {
+                0 => self.count0,
+                s if s < last => scan.next(),
+                s if s == last => scan.rem,
+                _ => 0,
+            };
+            at = at.wrapping_add(f);
+        }
+        Ok(Index {
+            cum,
+            alphabet: self.alphabet,
+            precision: self.precision,
+        })
+    }
+
     /// The symbol whose interval `[cum, cum + f)` holds `slot < M`, with
     /// `cum` and `f` (always found on a validated table). The scan of
     /// [`Scan::next`] in locals, without its end-of-input bookkeeping: the
@@ -262,6 +296,36 @@ impl<'a> Scan<'a> {
     }
 }
 
+/// A table's cumulative counts in the caller's RAM ([`Table::index`]):
+/// `cum[s]` is the sum of the counts of the symbols below `s`, `cum[A] = M`.
+#[derive(Debug)]
+pub struct Index<'c> {
+    cum: &'c [u16],
+    alphabet: u32,
+    precision: u32,
+}
+
+impl Index<'_> {
+    /// The symbol whose interval holds `slot < M`, with `cum` and `f`: the
+    /// last `s` with `cum[s] ≤ slot` (a symbol of count 0 has the same
+    /// `cum` as the next one, so the search never stops on it).
+    #[inline(always)]
+    fn find(&self, slot: u32) -> (u32, u32, u32) {
+        let at = |s: u32| u32::from(self.cum.get(s as usize).copied().unwrap_or(u16::MAX));
+        let (mut lo, mut hi) = (0u32, self.alphabet);
+        while hi.wrapping_sub(lo) > 1 {
+            let mid = lo.wrapping_add(hi) >> 1;
+            if at(mid) <= slot {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let cum = at(lo);
+        (lo, cum, at(hi).wrapping_sub(cum))
+    }
+}
+
 /// A rANS decoder over one stream (one block, SPEC.md §10.3–§10.5): the
 /// table, the state and the unread bytes; bytes past the stream's end read
 /// as zero.
@@ -314,14 +378,41 @@ impl<'a, 't> Decoder<'a, 't> {
     /// The next symbol (`0 … A − 1`).
     #[inline]
     pub fn symbol(&mut self) -> u32 {
+        self.step(|table, slot| table.find(slot))
+    }
+
+    /// One decode step: the slot, its symbol's `(s, cum, f)` by `find`, the
+    /// state's update and renormalisation.
+    #[inline(always)]
+    fn step(&mut self, find: impl FnOnce(&Table<'t>, u32) -> (u32, u32, u32)) -> u32 {
         let n = self.table.precision;
         let slot = self.x & ((1u32 << n).wrapping_sub(1));
-        let (s, cum, f) = self.table.find(slot);
+        let (s, cum, f) = find(&self.table, slot);
         self.x = f
             .wrapping_mul(self.x >> n)
             .wrapping_add(slot.wrapping_sub(cum));
         self.renormalise();
         s
+    }
+
+    /// [`Decoder::symbol`] through the table's [`Index`]: the same symbol
+    /// and state, found by binary search. An index of another table (other
+    /// alphabet or precision) falls back to the scan; one of another table
+    /// of the same shape gives other symbols, never a panic.
+    #[inline]
+    pub fn symbol_in(&mut self, index: &Index) -> u32 {
+        if index.alphabet != self.table.alphabet || index.precision != self.table.precision {
+            return self.symbol();
+        }
+        self.step(|_, slot| index.find(slot))
+    }
+
+    /// [`Decoder::value`] through the table's [`Index`] (see
+    /// [`Decoder::symbol_in`]).
+    #[inline]
+    pub fn value_in(&mut self, index: &Index) -> u32 {
+        let s = self.symbol_in(index);
+        self.escape(s)
     }
 
     /// `k ≤ 16` raw bits (uniform, `M = 2^k`, SPEC.md §10.4); larger `k`
@@ -341,6 +432,13 @@ impl<'a, 't> Decoder<'a, 't> {
     #[inline]
     pub fn value(&mut self) -> u32 {
         let s = self.symbol();
+        self.escape(s)
+    }
+
+    /// The value of symbol `s`: `s` below `E`, else the escaped value read
+    /// after it.
+    #[inline(always)]
+    fn escape(&mut self, s: u32) -> u32 {
         let e = self.table.alphabet.wrapping_sub(1);
         if s < e {
             return s;

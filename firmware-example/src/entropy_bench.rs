@@ -3,12 +3,14 @@
 //! `mocap_decoder::entropy`, times them with SysTick (instructions exactly under `-icount
 //! shift=0`) and prints one `# entropy` line per stream: symbols, alphabet, precision, bytes,
 //! the instructions of `Table::parse` + `Decoder::new` and per symbol (×100), and whether the
-//! symbols' checksum matches the encoder's. A loop of the same shape without the decoder is
-//! timed too (`# entropy_loop`), so the decoder's own share is the difference.
+//! symbols' checksum matches the encoder's; then the same through the table's index in RAM
+//! (`Table::index`, `Decoder::symbol_in`: binary search instead of the scan), with the
+//! instructions to build it. A loop of the same shape without the decoder is timed too
+//! (`# entropy_loop`), so the decoder's own share is the difference.
 
 use core::hint::black_box;
 
-use mocap_decoder::entropy::{Decoder, Table};
+use mocap_decoder::entropy::{Decoder, Index, Table};
 
 use crate::{calibrate, instructions, ticks, Out};
 
@@ -43,6 +45,43 @@ fn decode(d: &mut Decoder<'static, 'static>, n: u32, mut sum: u32) -> u32 {
         sum = sum.wrapping_mul(31).wrapping_add(d.symbol());
     }
     sum
+}
+
+/// Decodes `n` symbols through the index into the checksum.
+#[inline(never)]
+fn decode_in(d: &mut Decoder<'static, 'static>, index: &Index, n: u32, mut sum: u32) -> u32 {
+    for _ in 0..n {
+        sum = sum.wrapping_mul(31).wrapping_add(d.symbol_in(index));
+    }
+    sum
+}
+
+/// Entries of the index buffer (alphabets up to 1 023 symbols; 2 KB of stack).
+const INDEX_ENTRIES: usize = 1024;
+
+/// The stream decoded again through the table's index: (instructions to build the index,
+/// instructions ×100 per symbol, whether the checksum matches); `None` if the alphabet does not
+/// fit the buffer or the stream does not parse.
+#[inline(never)]
+fn run_indexed(s: &Stream, cal: u32) -> Option<(u64, u64, bool)> {
+    let (table, mut d) = parse(s.bytes)?;
+    let mut buf = [0u16; INDEX_ENTRIES];
+    let t0 = ticks::now();
+    let index = table.index(&mut buf).ok()?;
+    let build_ticks = ticks::since(t0, ticks::now());
+    let (mut sum, mut total, mut left) = (0u32, 0u64, s.symbols);
+    while left > 0 {
+        let n = left.min(CHUNK);
+        let t0 = ticks::now();
+        sum = decode_in(&mut d, &index, n, sum);
+        total += u64::from(ticks::since(t0, ticks::now()));
+        left -= n;
+    }
+    Some((
+        instructions(u64::from(build_ticks), cal),
+        instructions(total, cal) * 100 / u64::from(s.symbols.max(1)),
+        sum == s.checksum && d.is_finished(),
+    ))
 }
 
 /// The same loop without the decoder.
@@ -105,8 +144,19 @@ pub fn run(text: &mut Out) -> bool {
                 instructions(u64::from(parse_ticks), cal),
             )
             .kv("per_symbol_x100", per_x100)
-            .kv("ok", u64::from(good))
-            .nl();
+            .kv("ok", u64::from(good));
+        match run_indexed(s, cal) {
+            Some((build, per_x100, good)) => {
+                ok &= good;
+                text.kv("index_instructions", build)
+                    .kv("indexed_per_symbol_x100", per_x100)
+                    .kv("indexed_ok", u64::from(good));
+            }
+            None => {
+                text.str(" indexed=none");
+            }
+        }
+        text.nl();
     }
     ok
 }

@@ -2,7 +2,9 @@
 //! against decoder (`mocap_decoder::entropy`): random streams round-trip
 //! (alphabets 1 … 256, flat and skewed, 0 … 10 000 symbols), the size stays
 //! within 1 % of the Shannon entropy on a long skewed stream (tables and
-//! state included), and malformed tables and streams give typed errors.
+//! state included), malformed tables and streams give typed errors, and the
+//! binary-search path (`Table::index`, `Decoder::symbol_in`) decodes every
+//! stream to the same symbols and states as the scan.
 
 use mocap_decoder::entropy::{Decoder, Table};
 use mocap_decoder::Error;
@@ -33,12 +35,85 @@ impl Rng {
     }
 }
 
+/// Decodes `count` symbols with the scan and, beside it, through the
+/// table's index: the same symbol and state at every step.
 fn decode(bytes: &[u8], count: usize) -> Vec<u32> {
     let (t, used) = Table::parse(bytes).unwrap();
     let mut d = Decoder::new(t, &bytes[used..]).unwrap();
-    let out = (0..count).map(|_| d.symbol()).collect();
-    assert!(d.is_finished());
+    let mut buf = vec![0u16; t.alphabet() as usize + 1];
+    let index = t.index(&mut buf).unwrap();
+    let mut di = Decoder::new(t, &bytes[used..]).unwrap();
+    let out = (0..count)
+        .map(|i| {
+            let s = d.symbol();
+            assert_eq!(di.symbol_in(&index), s, "symbol {i}");
+            assert_eq!(di.state(), d.state(), "state after symbol {i}");
+            s
+        })
+        .collect();
+    assert!(d.is_finished() && di.is_finished());
     out
+}
+
+#[test]
+fn the_index_decodes_escaped_values_and_zero_counts_as_the_scan() {
+    // Counts with zeros between (symbols never coded), the escape last.
+    let mut rng = Rng(0x1234_5678);
+    for a in [2u32, 3, 17, 64, 200, 1000] {
+        let n = 12;
+        let mut counts = vec![0u32; a as usize];
+        let mut left = 1u32 << n;
+        for (s, c) in counts.iter_mut().enumerate().take(a as usize - 1) {
+            if s % 3 != 1 {
+                *c = (rng.next() % (left / 4 + 1)).min(left);
+                left -= *c;
+            }
+        }
+        counts[a as usize - 1] = left;
+        let model = Model::from_counts(n, counts.clone()).unwrap();
+        let values: Vec<u32> = (0..5000)
+            .map(|_| loop {
+                let v = rng.next() % (a + 40);
+                let s = v.min(a - 1) as usize;
+                if counts[s] > 0 {
+                    break v;
+                }
+            })
+            .collect();
+        let mut bytes = model.table_bytes();
+        bytes.extend(model.encode_values(&values).unwrap());
+        let (t, used) = Table::parse(&bytes).unwrap();
+        let mut buf = vec![0u16; a as usize + 1];
+        let index = t.index(&mut buf).unwrap();
+        let (mut d, mut di) = (
+            Decoder::new(t, &bytes[used..]).unwrap(),
+            Decoder::new(t, &bytes[used..]).unwrap(),
+        );
+        for (i, &v) in values.iter().enumerate() {
+            assert_eq!(d.value(), v, "a={a} value {i}");
+            assert_eq!(di.value_in(&index), v, "a={a} value {i} through the index");
+            assert_eq!(di.state(), d.state());
+        }
+        assert!(d.is_finished() && di.is_finished());
+        // Too short a buffer is an error; an index of another table falls
+        // back to the scan.
+        let mut short = vec![0u16; a as usize];
+        assert!(matches!(
+            t.index(&mut short),
+            Err(Error::EntropyTable { .. })
+        ));
+        let other = Model::from_counts(n, vec![1 << (n - 1), 1 << (n - 1)]).unwrap();
+        let other_bytes = other.table_bytes();
+        let (ot, _) = Table::parse(&other_bytes).unwrap();
+        let mut obuf = [0u16; 3];
+        let oindex = ot.index(&mut obuf).unwrap();
+        if a != 2 {
+            let mut dj = Decoder::new(t, &bytes[used..]).unwrap();
+            for &v in &values {
+                assert_eq!(dj.value_in(&oindex), v);
+            }
+        }
+    }
 }
 
 #[test]
