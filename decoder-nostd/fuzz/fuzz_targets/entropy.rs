@@ -4,7 +4,9 @@
 //! byte picks how the rest is split into table and stream and what is read:
 //! symbols, raw bits or escaped values. Inputs that parse are also checked
 //! against the encoder: the symbols decoded from a valid table re-encode to
-//! a stream that decodes to them again.
+//! a stream that decodes to them again; and where the alphabet fits 4 096
+//! symbols, the table's index (`Table::index`, `Decoder::symbol_in`) decodes
+//! the same bytes to the same symbols and states as the scan.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -27,12 +29,19 @@ fuzz_target!(|data: &[u8]| {
     let Ok(mut d) = Decoder::new(table, &rest[used..]) else {
         return;
     };
+    let mut buf = vec![0u16; 4097];
+    let index = table.index(&mut buf).ok();
+    let mut di = d.clone();
     let mut symbols = Vec::new();
     for i in 0..512u32 {
         match mode % 3 {
             0 => {
                 let s = d.symbol();
                 assert!(s < table.alphabet());
+                if let Some(index) = &index {
+                    assert_eq!(di.symbol_in(index), s, "index and scan agree");
+                    assert_eq!(di.state(), d.state());
+                }
                 symbols.push(s);
             }
             1 => {
