@@ -133,8 +133,8 @@ echo
 # Per-pose decode cost of one clip on every board's core, frames and 50 Hz sample_at.
 pose_cost_table() {
     local clip=$1 tag=$2
-    echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | stack used B |"
-    echo "|---|---|---|---|---|---|---|"
+    echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | predicted/pose (\`mocap target cost\`) | playback stack B | state B (N = channels) | stack used B |"
+    echo "|---|---|---|---|---|---|---|---|---|---|"
     for board in $(mocap_boards); do
         core=$(mocap_board_core "$board")
         for mode in frames:0 "sample_at 50 Hz":20000; do
@@ -148,11 +148,18 @@ pose_cost_table() {
             pc=$(sed -n 's/.* per_channel_x100=\([0-9]*\).*/\1/p' <<<"$line")
             worst=$(sed -n 's/.* max_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
             stack=$(sed -n 's/^# stack_bytes_used=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
-            echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $stack |"
+            pstack=$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
+            # The model's figures for the board's chip (same name): instructions/pose, state.
+            read -r predicted state < <("$mocap" target cost "$clip" --target "$board" | awk -v b="$board" '$1 == b { print $3, $6 }')
+            [ "$us" = 0 ] || predicted="-"
+            echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $predicted | $pstack | $state | $stack |"
         done
     done
     echo
 }
+echo "## index decode cost per pose, frames and sample_at, $(basename "$clip_src") at 1°"
+echo
+pose_cost_table "$out/clip.mcb" idx
 pca_src="$corpus/cmu/35_01.bvh"
 mocap_logged "$log" "$mocap" encode "$pca_src" -o "$out/pca.mcb" --codec pca-spline --max-error 50mm+arms:10mm
 echo "## pca-spline decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 50 mm + ARMS 10 mm, $(stat -c %s "$out/pca.mcb") bytes"

@@ -56,11 +56,14 @@ enum Command {
     View(cmd::view::Args),
     /// Write the procedural demo clip the project ships.
     Generate(cmd::generate::Args),
+    /// The chips `encode --target` knows, a clip's predicted cost on them, the cost model's fit.
+    Target(cmd::target::Args),
 }
 
 fn run(cli: Cli) -> cmd::Result {
     match cli.command {
         Command::Encode(a) => cmd::encode::run(a),
+        Command::Target(a) => cmd::target::run(a),
         Command::Decode(a) => cmd::decode::run(a),
         Command::Info(a) => cmd::info::run(a),
         Command::Eval(a) => cmd::eval::run(a),

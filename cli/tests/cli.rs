@@ -894,3 +894,138 @@ fn generate_the_demo_and_a_long_input() {
         text(&o.stderr)
     );
 }
+
+#[test]
+fn encode_for_a_chip_keeps_the_smallest_clip_that_fits_the_budget() {
+    let d = out_dir("target");
+    let clip = d.join("demo_rp2040.mcb");
+    let clip = clip.to_str().expect("utf-8 path");
+
+    // A chip without a budget: today's default codec, its predicted cost printed.
+    let o = mocap(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "-o",
+        clip,
+        "--target",
+        "rp2040",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(out.contains("rp2040 (M0, 133 MHz"), "{out}");
+    assert!(
+        out.contains("  index ") && out.contains("[chosen]"),
+        "{out}"
+    );
+
+    // A budget: every codec tried, each line judged, the smallest that fits kept.
+    let o = mocap(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "-o",
+        clip,
+        "--target",
+        "microbit",
+        "--budget",
+        "cpu=50%,ram=16k",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    for codec in ["index", "pca-spline", "predictive"] {
+        assert!(out.contains(&format!("  {codec} ")), "{out}");
+    }
+    let chosen: Vec<&str> = out.lines().filter(|l| l.ends_with("[chosen]")).collect();
+    assert_eq!(chosen.len(), 1, "{out}");
+    let size = |l: &str| -> usize {
+        l.split_whitespace()
+            .nth(1)
+            .and_then(|b| b.parse().ok())
+            .unwrap_or(usize::MAX)
+    };
+    let fitting = out
+        .lines()
+        .filter(|l| l.ends_with("[chosen]") || l.ends_with("[fits]"))
+        .map(size)
+        .min();
+    assert_eq!(Some(size(chosen[0])), fitting, "{out}");
+    assert_eq!(
+        std::fs::metadata(clip).expect("clip").len() as usize,
+        size(chosen[0])
+    );
+
+    // The prediction of a clip already made.
+    let o = mocap(&[
+        "target", "cost", clip, "--target", "microbit", "--target", "esp32c3",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("\nmicrobit ") && out.contains("\nesp32c3 "),
+        "{out}"
+    );
+
+    // Nothing fits a budget no clip can meet: an error saying what went over, no file.
+    let none = d.join("none.mcb");
+    let o = mocap(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "-o",
+        none.to_str().expect("utf-8"),
+        "--target",
+        "microbit",
+        "--budget",
+        "cpu=0.001%",
+    ]);
+    assert!(!o.status.success());
+    assert!(text(&o.stdout).contains("over: cpu"), "{}", text(&o.stdout));
+    assert!(
+        text(&o.stderr)
+            .contains("mocap: error: no codec's clip fits the microbit under budget cpu="),
+        "{}",
+        text(&o.stderr)
+    );
+    assert!(!none.exists());
+}
+
+/// The stderr of a `mocap` run that must fail.
+fn failure(args: &[&str]) -> String {
+    let o = mocap(args);
+    assert!(!o.status.success(), "{args:?} succeeded");
+    text(&o.stderr)
+}
+
+#[test]
+fn target_and_budget_errors_name_what_is_wrong() {
+    let demo = ["encode", "assets/animatronic_demo.bvh", "-o", "/dev/null"];
+    for (extra, message) in [
+        (
+            &["--budget", "cpu=2%"][..],
+            "mocap: error: --budget needs a chip as --target, not mcu (one of: microbit,",
+        ),
+        (
+            &["--target", "esp32"],
+            "mocap: error: unknown chip 'esp32' (known: microbit, lm3s6965,",
+        ),
+        (
+            &["--target", "rp2040", "--budget", "gpu=2%"],
+            "unknown budget 'gpu' (cpu, ram, flash)",
+        ),
+    ] {
+        let err = failure(&[&demo[..], extra].concat());
+        assert!(err.contains(message), "{extra:?}: {err}");
+    }
+    let o = mocap(&["target", "list"]);
+    assert!(o.status.success());
+    let out = text(&o.stdout);
+    for chip in [
+        "microbit",
+        "lm3s6965",
+        "mps2-an386",
+        "riscv-virt",
+        "rp2040",
+        "stm32f411",
+        "esp32c3",
+    ] {
+        assert!(out.contains(&format!("\n{chip} ")), "{out}");
+    }
+}

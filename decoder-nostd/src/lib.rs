@@ -68,6 +68,16 @@ pub mod spline {
     pub use crate::codec::spline::{apply, weights};
 }
 
+/// The words of the `pca-spline` player's cache of key intervals (the
+/// player's state, SPEC.md §6): a head, then a slot per group while they fit
+/// (`GROUP_HEAD + n` words for `k = 0`, `GROUP_HEAD + INTERVAL + 4k` else),
+/// then the constants; groups without a slot are decoded from their record
+/// on every pose. Public so the encoder can size a player for a clip.
+#[cfg(feature = "codec-pca-spline")]
+pub mod pca_spline_cache {
+    pub use crate::codec::pca_spline::cache::{CACHE_HEAD, GROUP_HEAD, INTERVAL};
+}
+
 /// The prediction and reconstruction of the `predictive` codec (SPEC.md
 /// §5b), public so the encoder quantises against exactly what the decoder
 /// computes.

@@ -31,4 +31,5 @@ pub mod rig;
 mod rotation;
 pub mod servo_clip;
 pub mod show;
+pub mod target;
 pub mod units;

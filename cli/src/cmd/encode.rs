@@ -9,6 +9,7 @@ use mocap_encoder::encode::{self, Bound, BoundSpec, EncodeOptions};
 use mocap_encoder::motion::Motion;
 use mocap_encoder::rig::Rig;
 use mocap_encoder::servo_clip;
+use mocap_encoder::target::{self, Budget, Chip};
 
 use super::{write, CodecArg, MotionArgs, UnitArg};
 
@@ -22,9 +23,17 @@ pub struct Args {
     /// Output .mcb file.
     #[arg(short, long)]
     output: PathBuf,
-    /// Target of the bitstream.
-    #[arg(long, value_enum, default_value = "mcu")]
-    target: Target,
+    /// Target of the bitstream: `mcu` (any microcontroller) or a chip
+    /// (`mocap target list`: rp2040, stm32f411, esp32c3, the QEMU boards…);
+    /// for a chip the encoder prints the clip's predicted decode cost there
+    /// (`mocap target cost`) and keeps the chip's flash and RAM.
+    #[arg(long, default_value = "mcu")]
+    target: String,
+    /// With a chip --target: what playing the clip may take of it,
+    /// `cpu=2%,ram=4k,flash=64k` (any of the three). Without --codec every
+    /// codec is tried and the smallest clip that fits is kept.
+    #[arg(long, value_parser = parse_budget)]
+    budget: Option<Budget>,
     /// Codec (default: `index` for motion clips — the cheapest to decode —
     /// and `predictive` for servo and marker clips — the smallest).
     #[arg(long, value_enum)]
@@ -64,12 +73,6 @@ pub struct Args {
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-enum Target {
-    /// A microcontroller: integer decoder, tables in flash.
-    Mcu,
-}
-
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
 enum Emit {
     /// A Rust source file with a `pub static CLIP: [u8; N]`.
     Rust,
@@ -100,11 +103,52 @@ fn parse_bounds(s: &str) -> Result<Vec<BoundSpec>, encode::BoundError> {
     s.split('+').map(str::parse).collect()
 }
 
+fn parse_budget(s: &str) -> Result<Budget, target::BudgetError> {
+    s.parse()
+}
+
+/// `--target`: `None` for `mcu` (no chip), else the chip.
+fn chip_of(a: &Args) -> super::Result<Option<&'static Chip>> {
+    if a.target == "mcu" {
+        if a.budget.is_some() {
+            return Err(format!(
+                "--budget needs a chip as --target, not mcu (one of: {})",
+                target::chip_names()
+            )
+            .into());
+        }
+        return Ok(None);
+    }
+    super::target::resolve(std::slice::from_ref(&a.target)).map(|c| c.first().copied())
+}
+
+/// A clip made with a chip --target: its predicted cost, checked against the
+/// budget and the chip (servo and marker clips: their one codec).
+fn check_cost(bytes: &[u8], chip: &'static Chip, budget: &Budget) -> super::Result {
+    let cost = target::predict(bytes, chip)?;
+    print!("{}", super::target::cost_table(std::slice::from_ref(&cost)));
+    let over = budget.overruns(&cost);
+    if !over.is_empty() {
+        return Err(format!(
+            "the clip does not fit the {} ({}); try another --codec or a looser --max-error",
+            chip.name,
+            over.join(", ")
+        )
+        .into());
+    }
+    Ok(())
+}
+
 pub fn run(a: Args) -> super::Result {
-    let Target::Mcu = a.target;
+    let chip = chip_of(&a)?;
+    let budget = a.budget.unwrap_or_default();
     let specs = a.max_error.concat();
     if super::markers::is_marker_file(&a.input) {
-        return encode_markers(&a, &specs);
+        encode_markers(&a, &specs)?;
+        return match chip {
+            Some(c) => check_cost(&std::fs::read(&a.output)?, c, &budget),
+            None => Ok(()),
+        };
     }
     let input = a.motion.read(&a.input)?;
     let unit = a.units.resolve(&input);
@@ -128,9 +172,19 @@ pub fn run(a: Args) -> super::Result {
                 ServoNamesArg::Keep => servo_clip::ServoNames::Keep,
             },
         };
-        return encode_servo_clip(&m, rig_path, unit.metres(), opts, &a.output);
+        encode_servo_clip(&m, rig_path, unit.metres(), opts, &a.output)?;
+        return match chip {
+            Some(c) => check_cost(&std::fs::read(&a.output)?, c, &budget),
+            None => Ok(()),
+        };
     }
-    let codec = a.codec.map_or(CodecChoice::Index, Into::into);
+    // A budget without --codec: every codec, the smallest that fits.
+    let default = if a.budget.is_some() {
+        CodecChoice::Auto
+    } else {
+        CodecChoice::Index
+    };
+    let codec = a.codec.map_or(default, Into::into);
     eprintln!(
         "{}: {} frames × {} channels at {:.1} Hz, units {unit}; encoding ({codec:?}, bound {bound})…",
         a.input.display(),
@@ -144,10 +198,15 @@ pub fn run(a: Args) -> super::Result {
         metres_per_unit: unit.metres(),
         key_interval: a.key_interval,
     };
-    let bar = crate::progress::Bar::new(1);
-    let enc = encode::encode_with(&m, &opts, &bar);
-    bar.finish();
-    let enc = enc?;
+    let enc = match chip {
+        None => {
+            let bar = crate::progress::Bar::new(1);
+            let enc = encode::encode_with(&m, &opts, &bar);
+            bar.finish();
+            enc?
+        }
+        Some(chip) => encode_for(&m, &opts, chip, &budget)?,
+    };
     write(&a.output, &enc.bytes)?;
     let file_bytes = std::fs::metadata(&a.input).map(|m| m.len()).unwrap_or(0);
     let x = &enc.metrics;
@@ -173,6 +232,87 @@ pub fn run(a: Args) -> super::Result {
         eprintln!("wrote {}", p.display());
     }
     Ok(())
+}
+
+/// A motion clip for a chip: each candidate codec's clip, its predicted
+/// cost, and the smallest that fits the budget and the chip.
+fn encode_for(
+    m: &Motion,
+    opts: &EncodeOptions,
+    chip: &'static Chip,
+    budget: &Budget,
+) -> super::Result<encode::Encoded> {
+    let codecs: Vec<CodecChoice> = if opts.codec == CodecChoice::Auto {
+        encode::AUTO_CODECS.to_vec()
+    } else {
+        vec![opts.codec]
+    };
+    let bar = crate::progress::Bar::new(codecs.len());
+    let results: Vec<_> = codecs
+        .iter()
+        .map(|&codec| {
+            let one = EncodeOptions {
+                codec,
+                ..opts.clone()
+            };
+            let r = encode::encode_with(m, &one, &bar);
+            (codec, r)
+        })
+        .collect();
+    bar.finish();
+    let (candidates, best) = target::choose(results, chip, budget);
+    println!(
+        "{} ({}, {} MHz, {} KB flash, {} KB RAM), budget {budget}:",
+        chip.name,
+        chip.core,
+        chip.clock_hz / 1_000_000,
+        chip.flash_bytes / 1024,
+        chip.ram_bytes / 1024
+    );
+    for (i, c) in candidates.iter().enumerate() {
+        let size = c.encoded.as_ref().map_or_else(
+            |e| format!("no clip: {e}"),
+            |e| format!("{} bytes", e.bytes.len()),
+        );
+        let cost = c.cost.as_ref().map_or_else(
+            |e| e.clone(),
+            |k| {
+                format!(
+                    "predicted {:.0} instructions/pose = {:.3}% cpu at {:.0} Hz, ram {} B (state {} + pose {} + stack {}), flash {} B",
+                    k.instructions_per_pose,
+                    k.cpu_share * 100.0,
+                    k.poses_per_second,
+                    k.ram_bytes(),
+                    k.state_bytes,
+                    k.pose_bytes,
+                    k.playback_stack_bytes,
+                    k.flash_bytes
+                )
+            },
+        );
+        let verdict = if Some(i) == best {
+            "chosen".to_string()
+        } else if c.fits() {
+            "fits".to_string()
+        } else if c.overruns.is_empty() {
+            "-".to_string()
+        } else {
+            format!("over: {}", c.overruns.join(", "))
+        };
+        println!("  {:<10} {size}; {cost} [{verdict}]", c.codec.name());
+    }
+    let Some(best) = best else {
+        return Err(format!(
+            "no codec's clip fits the {} under budget {budget}: loosen --max-error or the budget, or pick a faster chip",
+            chip.name
+        )
+        .into());
+    };
+    candidates
+        .into_iter()
+        .nth(best)
+        .and_then(|c| c.encoded.ok())
+        .ok_or_else(|| "the chosen clip vanished".into())
 }
 
 /// `mocap encode markers.c3d`: a marker clip (no rig: a marker file has no

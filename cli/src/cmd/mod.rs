@@ -13,6 +13,7 @@ pub mod markers;
 pub mod play;
 pub mod send;
 pub mod show;
+pub mod target;
 pub mod track;
 pub mod view;
 

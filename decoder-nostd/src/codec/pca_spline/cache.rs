@@ -8,13 +8,13 @@ use super::*;
 /// Words of the cache head: owner (segment start + 1), groups with a slot,
 /// offset of the first record without one, where the constants' values
 /// are (−1: not cached).
-pub(super) const CACHE_HEAD: usize = 4;
+pub const CACHE_HEAD: usize = 4;
 
 /// Words at the start of every group slot (see `eval`).
-pub(super) const GROUP_HEAD: usize = 3;
+pub const GROUP_HEAD: usize = 3;
 
 /// Words of a `k > 0` slot's key interval (see [`Cached`]).
-pub(super) const INTERVAL: usize = 4;
+pub const INTERVAL: usize = 4;
 
 /// The key interval a cache slot holds, packed in [`INTERVAL`] words:
 /// `t1 << 16 | span` (`span = t2 − t1`), the bound `lim` of `rel − (t1 <<

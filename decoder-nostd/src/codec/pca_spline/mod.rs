@@ -10,7 +10,7 @@
 //! patch position), [`cache`] (the player's key-interval cache and the hot
 //! channel loops), [`eval`] (poses from the records, blending).
 
-mod cache;
+pub(crate) mod cache;
 mod cursor;
 mod eval;
 mod validate;

@@ -99,6 +99,8 @@ pub type SegmentInfo = (u32, u32, Vec<(usize, usize)>);
 pub struct SectionInfo {
     /// Channel groups (separate curves plus the PCA body).
     pub groups: usize,
+    /// Channels of each group.
+    pub group_channels: Vec<usize>,
     /// Constant channels.
     pub consts: usize,
     /// Per segment: start, end, and per group (k, keys).
@@ -159,6 +161,7 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
     }
     let mut info = SectionInfo {
         groups,
+        group_channels: sizes.clone(),
         consts,
         ..SectionInfo::default()
     };

@@ -1,0 +1,376 @@
+//! What a clip costs the chip that plays it, predicted from the clip's
+//! structure: instructions per pose (a linear model per core and codec,
+//! fitted to QEMU instruction counts by `scripts/cost.sh`), the player's
+//! state, the caller's pose, the playback path's stack, and flash.
+
+use std::fmt;
+
+use mocap_decoder::pca_spline_cache::{CACHE_HEAD, GROUP_HEAD, INTERVAL};
+use mocap_decoder::{consts, Clip};
+
+use super::calibration;
+use super::chips::{Chip, Core};
+use crate::codec::{index, pca_spline, predictive};
+
+/// The codec a clip is coded with, as the cost model sees it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum CodecKind {
+    Index,
+    PcaSpline,
+    Predictive,
+}
+
+impl CodecKind {
+    pub const ALL: [CodecKind; 3] = [
+        CodecKind::Index,
+        CodecKind::PcaSpline,
+        CodecKind::Predictive,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            CodecKind::Index => "index",
+            CodecKind::PcaSpline => "pca-spline",
+            CodecKind::Predictive => "predictive",
+        }
+    }
+
+    /// What each entry of [`Features::x`] is, for the fit's report.
+    pub fn feature_names(self) -> &'static [&'static str] {
+        match self {
+            CodecKind::Index => &[
+                "1",
+                "channels",
+                "delta-coded channels",
+                "delta groups",
+                "key channel levels / key interval",
+                "key groups / key interval",
+                "payload bits per pose / 32",
+            ],
+            CodecKind::PcaSpline => &[
+                "1",
+                "channels",
+                "cached: sum of k",
+                "uncached: sum of channels x k",
+                "uncached: groups",
+                "key intervals entered x k per pose",
+                "cached, k > 8: sum of channels x k",
+            ],
+            CodecKind::Predictive => &[
+                "1",
+                "channels",
+                "coded channels",
+                "payload bits per pose / 32",
+                "block starts x coded channels per pose",
+            ],
+        }
+    }
+}
+
+impl fmt::Display for CodecKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A clip's structure, the inputs of the cost model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Features {
+    pub codec: CodecKind,
+    pub channels: usize,
+    pub frames: u32,
+    pub frame_rate_hz: f64,
+    pub clip_bytes: usize,
+    /// Words of the player's state the clip needs (`Player<N>`: `N` at least this).
+    pub state_words: usize,
+    /// The model's inputs, per pose ([`CodecKind::feature_names`]).
+    pub x: Vec<f64>,
+}
+
+/// Why a clip has no cost figures.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum FeatureError {
+    #[error("not a clip: {0}")]
+    Parse(String),
+    #[error("the clip has no codec section the cost model knows (a show or a newer codec)")]
+    NoCodec,
+}
+
+impl Features {
+    /// The structure of the clip `bytes`, played by a player whose state
+    /// holds everything the clip can use (`pca-spline`: every group cached).
+    pub fn of(bytes: &[u8]) -> Result<Features, FeatureError> {
+        Features::with_capacity(bytes, None)
+    }
+
+    /// The structure of the clip `bytes` played by a `Player<N>` of
+    /// `capacity = Some(N)` words (`pca-spline` caches the groups that fit).
+    pub fn with_capacity(bytes: &[u8], capacity: Option<usize>) -> Result<Features, FeatureError> {
+        let clip = Clip::parse(bytes).map_err(|e| FeatureError::Parse(e.to_string()))?;
+        let h = clip.header();
+        let channels = h.channel_count();
+        let frames = h.frame_count();
+        let f = f64::from(frames.max(1));
+        let c = channels as f64;
+        let frame_rate_hz = 1e9 / f64::from(h.frame_time_ns().max(1));
+        let mut out = Features {
+            codec: CodecKind::Index,
+            channels,
+            frames,
+            frame_rate_hz,
+            clip_bytes: bytes.len(),
+            state_words: channels,
+            x: Vec::new(),
+        };
+        for sec in clip.sections() {
+            match sec.id {
+                consts::SECTION_CODEC_INDEX => {
+                    let s = index::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
+                    let per = s.per_channel(channels);
+                    let k = f64::from(s.key_interval);
+                    let (delta_channels, delta_groups, key_levels, key_groups) =
+                        if s.key_interval == 0 {
+                            // Every frame from the key set.
+                            let levels: usize = per.iter().map(|d| usize::from(d.key_levels)).sum();
+                            (levels as f64, s.key.len() as f64, 0.0, 0.0)
+                        } else {
+                            let levels: usize = per.iter().map(|d| usize::from(d.key_levels)).sum();
+                            (
+                                per.iter().filter(|d| d.delta_bits.is_some()).count() as f64,
+                                s.delta.len() as f64,
+                                levels as f64 / k,
+                                s.key.len() as f64 / k,
+                            )
+                        };
+                    out.codec = CodecKind::Index;
+                    out.x = vec![
+                        1.0,
+                        c,
+                        delta_channels,
+                        delta_groups,
+                        key_levels,
+                        key_groups,
+                        s.payload_bytes as f64 * 8.0 / f / 32.0,
+                    ];
+                    return Ok(out);
+                }
+                consts::SECTION_CODEC_PCA_SPLINE => {
+                    let s = pca_spline::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
+                    let need = pca_cache_words(&s);
+                    let words = capacity.unwrap_or(need.max(channels));
+                    out.state_words = words;
+                    out.codec = CodecKind::PcaSpline;
+                    out.x = pca_features(&s, channels, f, words);
+                    return Ok(out);
+                }
+                consts::SECTION_CODEC_PREDICTIVE => {
+                    let s = predictive::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
+                    out.codec = CodecKind::Predictive;
+                    out.state_words = s.state_words.max(channels);
+                    out.x = vec![
+                        1.0,
+                        c,
+                        s.coded as f64,
+                        s.payload_bytes as f64 * 8.0 / f / 32.0,
+                        f64::from(s.blocks) * s.coded as f64 / f,
+                    ];
+                    return Ok(out);
+                }
+                _ => {}
+            }
+        }
+        Err(FeatureError::NoCodec)
+    }
+}
+
+/// Cache words a segment's groups take (SPEC.md §6, `pca_spline_cache`).
+fn slot_words(n: usize, k: usize) -> usize {
+    if k == 0 {
+        GROUP_HEAD + n
+    } else {
+        GROUP_HEAD + INTERVAL + 4 * k
+    }
+}
+
+/// Player state words that cache every group and the constants of every
+/// segment of a `pca-spline` clip.
+fn pca_cache_words(s: &pca_spline::SectionInfo) -> usize {
+    s.segments
+        .iter()
+        .map(|(_, _, per)| {
+            let slots: usize = s
+                .group_channels
+                .iter()
+                .zip(per)
+                .map(|(&n, &(k, _))| slot_words(n, k))
+                .sum();
+            CACHE_HEAD + slots + s.consts
+        })
+        .max()
+        .unwrap_or(CACHE_HEAD)
+}
+
+/// The `pca-spline` features with a cache of `words` words: the groups of
+/// each segment are cached in order while their slots fit (as the
+/// player's `prepare`), the rest decoded from their records on every pose
+/// (some 3 400 instructions a group on the M0, whatever its size). Chosen by
+/// their fit on the calibration clips (BENCHMARKS.md §2).
+fn pca_features(
+    s: &pca_spline::SectionInfo,
+    channels: usize,
+    frames: f64,
+    words: usize,
+) -> Vec<f64> {
+    let (mut cached_k, mut uncached_nk, mut uncached_groups, mut entered) = (0.0, 0.0, 0.0, 0.0);
+    // Groups of more components than the player's specialised loops (k ≤ 8)
+    // take its generic one, slower per channel and component.
+    let mut generic_nk = 0.0;
+    for (start, end, per) in &s.segments {
+        let w = f64::from(end.saturating_sub(*start) + 1) / frames;
+        let mut free = words.saturating_sub(CACHE_HEAD);
+        let mut fits = true;
+        for (&n, &(k, m)) in s.group_channels.iter().zip(per) {
+            let size = slot_words(n, k);
+            fits = fits && size <= free;
+            if fits {
+                free -= size;
+                cached_k += w * k as f64;
+                if k > 8 {
+                    generic_nk += w * (n * k) as f64;
+                }
+            } else {
+                uncached_nk += w * (n * k) as f64;
+                uncached_groups += w;
+            }
+            entered += (m * k) as f64 / frames;
+        }
+    }
+    vec![
+        1.0,
+        channels as f64,
+        cached_k,
+        uncached_nk,
+        uncached_groups,
+        entered,
+        generic_nk,
+    ]
+}
+
+/// A core's figures for one codec (generated into [`calibration`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Model {
+    pub core: Core,
+    pub codec: CodecKind,
+    /// Instructions per pose = `coefficients · x`.
+    pub coefficients: &'static [f64],
+}
+
+/// Peak stack of the playback path of `codec` on `core` (`next_frame` and
+/// what it calls), the most measured by `scripts/cost.sh`.
+pub fn playback_stack_bytes(core: Core, codec: CodecKind) -> Option<usize> {
+    calibration::PLAYBACK_STACK_BYTES
+        .iter()
+        .find(|(c, k, _)| *c == core && *k == codec)
+        .map(|&(_, _, b)| b as usize)
+}
+
+/// The model of `codec` on `core`, and the core it was fitted on (a core
+/// without measurements borrows the nearest one's: the M4F the M3's).
+pub fn model(core: Core, codec: CodecKind) -> Option<(&'static Model, Core)> {
+    let find = |c: Core| {
+        calibration::MODELS
+            .iter()
+            .find(|m| m.core == c && m.codec == codec)
+    };
+    find(core).map(|m| (m, core)).or_else(|| match core {
+        Core::M4F => find(Core::M3).map(|m| (m, Core::M3)),
+        _ => None,
+    })
+}
+
+/// The player's state in bytes for `state_words` words on a 32-bit core:
+/// `size_of::<Player<N>>()` with `N = state_words`.
+pub fn state_bytes(state_words: usize) -> usize {
+    calibration::PLAYER_FIXED_BYTES + 4 * state_words
+}
+
+/// Predicted cost of a clip on a chip.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cost {
+    pub chip: &'static Chip,
+    /// The core whose measurements the prediction comes from.
+    pub model_core: Core,
+    /// Instructions per decoded pose (`next_frame`).
+    pub instructions_per_pose: f64,
+    /// Poses per second: the clip's frame rate (the player decodes every
+    /// frame it passes, also under `sample_at` at a lower servo rate).
+    pub poses_per_second: f64,
+    /// Share of the core at its clock, one instruction per cycle.
+    pub cpu_share: f64,
+    pub state_bytes: usize,
+    /// The caller's pose (4 bytes per channel).
+    pub pose_bytes: usize,
+    pub playback_stack_bytes: usize,
+    /// Clip plus the decoder's code.
+    pub flash_bytes: usize,
+}
+
+impl Cost {
+    /// State + pose + playback stack: the RAM playing the clip takes.
+    pub fn ram_bytes(&self) -> usize {
+        self.state_bytes + self.pose_bytes + self.playback_stack_bytes
+    }
+}
+
+/// Why a cost cannot be predicted.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum CostError {
+    #[error(transparent)]
+    Features(#[from] FeatureError),
+    #[error("no cost model of {codec} on the {core} (run scripts/cost.sh --write)")]
+    NoModel { core: Core, codec: CodecKind },
+}
+
+/// The cost of the clip `bytes` on `chip`.
+pub fn predict(bytes: &[u8], chip: &'static Chip) -> Result<Cost, CostError> {
+    predict_features(&Features::of(bytes)?, chip)
+}
+
+/// The cost of a clip of features `f` on `chip`.
+pub fn predict_features(f: &Features, chip: &'static Chip) -> Result<Cost, CostError> {
+    let (m, model_core) = model(chip.core, f.codec).ok_or(CostError::NoModel {
+        core: chip.core,
+        codec: f.codec,
+    })?;
+    let per_pose = instructions(m.coefficients, &f.x);
+    let cpu_share = per_pose * f.frame_rate_hz / f64::from(chip.clock_hz.max(1));
+    Ok(Cost {
+        chip,
+        model_core,
+        instructions_per_pose: per_pose,
+        poses_per_second: f.frame_rate_hz,
+        cpu_share,
+        state_bytes: state_bytes(f.state_words),
+        pose_bytes: 4 * f.channels,
+        playback_stack_bytes: playback_stack_bytes(chip.core, f.codec)
+            .or_else(|| playback_stack_bytes(model_core, f.codec))
+            .unwrap_or(0),
+        flash_bytes: f.clip_bytes
+            + decoder_code_bytes(chip.core).unwrap_or(decoder_code_bytes(model_core).unwrap_or(0)),
+    })
+}
+
+/// `coefficients · x`, never below one instruction per channel's copy.
+pub fn instructions(coefficients: &[f64], x: &[f64]) -> f64 {
+    let dot: f64 = coefficients.iter().zip(x).map(|(a, b)| a * b).sum();
+    // x[1] is the channel count for every codec: at least the copy.
+    dot.max(x.get(1).copied().unwrap_or(1.0))
+}
+
+/// The decoder's code on `core` (every codec linked), as measured.
+pub fn decoder_code_bytes(core: Core) -> Option<usize> {
+    calibration::DECODER_CODE_BYTES
+        .iter()
+        .find(|(c, _)| *c == core)
+        .map(|&(_, b)| b)
+}

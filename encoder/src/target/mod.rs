@@ -1,0 +1,16 @@
+//! `mocap encode --target <chip> --budget …`: the chips a clip is made for
+//! ([`chips`]), what a clip costs them ([`cost`], a model fitted to QEMU
+//! instruction counts by `scripts/cost.sh`, [`fit`]), and the limits a user
+//! sets ([`budget`]).
+
+pub mod budget;
+mod calibration;
+pub mod chips;
+pub mod choose;
+pub mod cost;
+pub mod fit;
+
+pub use budget::{Budget, BudgetError};
+pub use chips::{chip, chip_names, Chip, Core, CHIPS};
+pub use choose::{choose, Candidate};
+pub use cost::{predict, CodecKind, Cost, CostError, Features};

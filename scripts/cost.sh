@@ -1,0 +1,171 @@
+#!/usr/bin/env bash
+# The decode cost model of `mocap encode --target` (encoder/src/target/), measured and fitted:
+#
+#   bash scripts/cost.sh [--boards "microbit lm3s6965 riscv-virt"] [--check-boards "mps2-an386"] [--write]
+#   bash scripts/cost.sh --fit-only [--write]   (step 3 alone, on the last run's measurements)
+#   bash scripts/cost.sh --resume [...]          (keeps measured.tsv's rows, measures the rest)
+#
+#  1. encodes two sets of clips from the corpus ($MOCAP_CORPUS, default ../shared/data) and
+#     assets/ into target/cost/clips: the calibration set (the fit) and the validation set (held
+#     out: files the fit never sees), every codec at two bounds each;
+#  2. runs every clip in QEMU with -icount shift=0 (scripts/firmware.sh run --icount) on each
+#     board of --boards (fit and checked) and of --check-boards (checked only: a core the model
+#     predicts from another core's fit, the M4F from the M3's), rows into target/cost/measured.tsv;
+#  3. `mocap target fit target/cost/measured.tsv` fits the model per core and codec on the
+#     calibration rows and prints predicted against measured for every row, and the worst error
+#     per set; with --write it rewrites encoder/src/target/calibration.rs (the coefficients the
+#     encoder ships) and BENCHMARKS.md's block between `<!-- bench:cost -->` markers.
+# Clips the example firmware's player cannot hold (a predictive clip needs 3 words of state per
+# channel; the firmware has 320) are reported and not measured.
+# Takes about 30 minutes on 2 cores (some 350 firmware builds and runs of ~5 s each).
+set -euo pipefail
+# shellcheck source=scripts/toolchain.sh
+source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
+cd "$MOCAP_REPO_ROOT"
+corpus="${MOCAP_CORPUS:-../shared/data}"
+
+boards="microbit lm3s6965 riscv-virt"
+check_boards="mps2-an386"
+write=""
+fit_only=""
+resume=""
+while [ "$#" -gt 0 ]; do
+    case "$1" in
+        --boards) boards="$2"; shift 2 ;;
+        --check-boards) check_boards="$2"; shift 2 ;;
+        --write) write=1; shift ;;
+        --fit-only) fit_only=1; shift ;;
+        --resume) resume=1; shift ;;
+        -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+        *) echo "cost.sh: unknown argument '$1'" >&2; exit 2 ;;
+    esac
+done
+
+[ -d "$corpus/cmu" ] || { echo "cost.sh: no corpus at $corpus (set MOCAP_CORPUS)" >&2; exit 2; }
+cargo build --release -q -p mocap-cli
+mocap="${CARGO_TARGET_DIR:-target}/release/mocap"
+out=target/cost
+mkdir -p "$out/clips"
+tsv="$out/measured.tsv"
+# set name input: one source of the calibration (fit) or validation (check) set.
+sources=(
+    "fit 05_04 $corpus/cmu/05_04.bvh"
+    "fit 09_01 $corpus/cmu/09_01.bvh"
+    "fit 16_07 $corpus/cmu/16_07.bvh"
+    "fit 35_17 $corpus/cmu/35_17.bvh"
+    "fit 002_01 $corpus/iclone-cmu/002_01.bvh"
+    "fit 005_11 $corpus/iclone-cmu/005_11.bvh"
+    "fit 007_03 $corpus/iclone-cmu/007_03.bvh"
+    "fit 13_39 $corpus/asf-amc/13_39.amc"
+    "fit demo assets/animatronic_demo.bvh"
+    "fit 00_Walk1 $corpus/c3d/00_Walk1.c3d"
+    "check 35_01 $corpus/cmu/35_01.bvh"
+    "check 06_05 $corpus/cmu/06_05.bvh"
+    "check 01_14 $corpus/cmu-long/01_14.bvh"
+    "check 002_09 $corpus/iclone-cmu/002_09.bvh"
+    "check 007_12 $corpus/iclone-cmu/007_12.bvh"
+    "check 16_15 $corpus/asf-amc/16_15.amc"
+    "check 01_Eb015pi $corpus/c3d/01_Eb015pi.c3d"
+)
+
+# bounds INPUT CODEC: the codec's two bounds (marker clips take lengths only).
+bounds() {
+    case "$1:$2" in
+        *.c3d:*) echo "5mm 50mm+arms:10mm" ;;
+        *:index) echo "1deg 20mm" ;;
+        *:pca-spline) echo "50mm+arms:10mm 20mm" ;;
+        *:predictive) echo "1deg 0.25deg" ;;
+    esac
+}
+
+# encode_clips: every source with every codec at its two bounds; sets clips=("set path" ...).
+encode_clips() {
+    echo "cost.sh: encoding the clips into $out/clips" >&2
+    clips=()
+    local s set name input codec b tag clip
+    for s in "${sources[@]}"; do
+        read -r set name input <<<"$s"
+        for codec in index pca-spline predictive; do
+            for b in $(bounds "$input" "$codec"); do
+                tag="$(tr -c 'a-z0-9\n' '_' <<<"$b")"
+                clip="$out/clips/${name}_${codec}_${tag}.mcb"
+                if [ ! -s "$clip" ] || [ "$input" -nt "$clip" ]; then
+                    "$mocap" encode "$input" --codec "$codec" --max-error "$b" -o "$clip" >/dev/null 2>>"$out/encode.log" \
+                        || { echo "cost.sh: encoding $input ($codec, $b) failed; see $out/encode.log" >&2; exit 1; }
+                fi
+                clips+=("$set $clip")
+            done
+        done
+    done
+}
+
+# measure_board BOARD ONLY_CHECK: every clip (only the check set if ONLY_CHECK) on BOARD, rows
+# appended to measured.tsv: board core set clip decode_per_pose playback_stack_bytes.
+measure_board() {
+    local board=$1 only_check=$2 core n=0 c set clip log per stack
+    core="$(mocap_board_core "$board")"
+    for c in "${clips[@]}"; do
+        read -r set clip <<<"$c"
+        [ -n "$only_check" ] && [ "$set" = fit ] && continue
+        if [ -n "$resume" ] && awk -F'\t' -v b="$board" -v c="$clip" '$1 == b && $4 == c { f = 1 } END { exit !f }' "$tsv"; then
+            continue
+        fi
+        if ! log="$(bash scripts/firmware.sh run --board "$board" --clip "$clip" --icount 2>>"$out/firmware.log")"; then
+            # A clip the example firmware's player cannot hold (MAX_CHANNELS words of state) is
+            # not measured; any other failure is.
+            if grep -q '^# error player:.*capacity' <<<"$log"; then
+                echo "cost.sh: $clip on $board: $(grep '^# error' <<<"$log" | head -1 | cut -c3-) (not measured)" >&2
+                continue
+            fi
+            echo "cost.sh: $clip on $board failed:" >&2
+            grep '^#' <<<"$log" >&2 || true
+            exit 1
+        fi
+        per="$(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\) .*/\1/p' <<<"$log")"
+        stack="$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' <<<"$log")"
+        printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$board" "$core" "$set" "$clip" "$per" "$stack" >>"$tsv"
+        n=$((n + 1))
+    done
+    echo "cost.sh: $board ($core): $n clips" >&2
+}
+
+# board_figures BOARD...: boards.tsv, per board: core, the player's state at the firmware's
+# capacity (state_bytes, max_channels) and the decoder's code (firmware.sh size).
+board_figures() {
+    local board core log state max code
+    printf 'board\tcore\tstate_bytes\tmax_channels\tdecoder_code_bytes\n' >"$out/boards.tsv"
+    for board in "$@"; do
+        core="$(mocap_board_core "$board")"
+        log="$(bash scripts/firmware.sh run --board "$board" --icount 2>>"$out/firmware.log")" \
+            || { echo "cost.sh: the demo clip on $board failed; see $out/firmware.log" >&2; exit 1; }
+        state="$(sed -n 's/^# state_bytes=\([0-9]*\).*/\1/p' <<<"$log")"
+        max="$(sed -n 's/^# board=.* max_channels=\([0-9]*\).*/\1/p' <<<"$log")"
+        code="$(bash scripts/firmware.sh size --board "$board" 2>>"$out/firmware.log" | sed -n 's/^decoder_code_bytes=//p')"
+        printf '%s\t%s\t%s\t%s\t%s\n' "$board" "$core" "$state" "$max" "$code" >>"$out/boards.tsv"
+    done
+}
+
+if [ -z "$fit_only" ]; then
+    encode_clips
+    [ -n "$resume" ] && [ -s "$tsv" ] \
+        || printf 'board\tcore\tset\tclip\tdecode_per_pose\tplayback_stack_bytes\n' >"$tsv"
+    for b in $boards; do measure_board "$b" ""; done
+    for b in $check_boards; do measure_board "$b" 1; done
+fi
+[ -s "$tsv" ] || { echo "cost.sh: no measurements in $tsv (run without --fit-only first)" >&2; exit 2; }
+if [ -z "$fit_only" ] || [ ! -s "$out/boards.tsv" ]; then
+    # shellcheck disable=SC2086 # board lists are words
+    board_figures $boards $check_boards
+fi
+
+fit_args=("$tsv")
+[ -n "$write" ] && fit_args+=(--write encoder/src/target/calibration.rs)
+"$mocap" target fit "${fit_args[@]}" | tee "$out/fit.md"
+if [ -n "$write" ]; then
+    # shellcheck source=scripts/bench_splice.sh
+    source scripts/bench_splice.sh
+    splice_benchmarks cost "$out/fit.md"
+    rustfmt --edition 2021 encoder/src/target/calibration.rs
+    cargo build --release -q -p mocap-cli
+    echo "cost.sh: wrote encoder/src/target/calibration.rs and BENCHMARKS.md (bench:cost); rebuild done" >&2
+fi

@@ -1,0 +1,108 @@
+//! The cost model of `mocap encode --target` (encoder/src/target/) against
+//! the instructions QEMU counts (`-icount shift=0`), on clips the fit never
+//! saw (`scripts/cost.sh` keeps 35_01 in its held-out set): on every board,
+//! every codec's predicted instructions per pose within ±15 % of the
+//! measured, the playback path's stack within the model's, and the player's
+//! state as the model computes it.
+//!
+//! Needs QEMU (as the parity tests) and the CMU corpus; prints SKIPPED
+//! without them (under `CI` a missing emulator fails).
+
+use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
+use mocap_encoder::target::{self, cost};
+use mocap_encoder::{bvh, units};
+use mocap_tests::{boards, corpus_file, qemu_available, run_firmware, skipped};
+
+/// The value of `key=` on the first `#` line that has it (and starts with
+/// `line`: `# decode_instructions_total=` for the decode figures).
+fn stat_on(uart: &str, line: &str, key: &str) -> u64 {
+    let pat = format!("{key}=");
+    uart.lines()
+        .filter(|l| l.starts_with(line))
+        .flat_map(str::split_whitespace)
+        .find_map(|w| w.strip_prefix(&pat))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no {key}= in the firmware's output:\n{uart}"))
+}
+
+fn stat(uart: &str, key: &str) -> u64 {
+    stat_on(uart, "#", key)
+}
+
+#[test]
+fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
+    if !qemu_available() {
+        return;
+    }
+    let Some(path) = corpus_file("cmu", "35_01.bvh") else {
+        skipped("corpus not found (set MOCAP_CORPUS)");
+        return;
+    };
+    let m = bvh::read_file(&path).unwrap();
+    let dir = std::env::temp_dir().join(format!("mocap-qemu-cost-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut worst = 0.0f64;
+    for (codec, bound) in [
+        (CodecChoice::Index, "1deg"),
+        (CodecChoice::PcaSpline, "50mm+arms:10mm"),
+        (CodecChoice::Predictive, "1deg"),
+    ] {
+        let opts = EncodeOptions {
+            codec,
+            bound: Bound::from_specs(
+                &bound
+                    .split('+')
+                    .map(|b| b.parse::<BoundSpec>().unwrap())
+                    .collect::<Vec<_>>(),
+            ),
+            metres_per_unit: units::detect(&m).metres(),
+            key_interval: None,
+        };
+        let bytes = encode::encode(&m, &opts).unwrap().bytes;
+        let clip = dir.join(format!("35_01_{}.mcb", codec.name()));
+        std::fs::write(&clip, &bytes).unwrap();
+        let features = target::Features::of(&bytes).unwrap();
+        eprintln!("35_01 {} at {bound}: {} bytes", codec.name(), bytes.len());
+        for board in boards() {
+            let chip = target::chip(&board)
+                .unwrap_or_else(|| panic!("board {board} has no chip profile of the same name"));
+            let predicted = target::predict(&bytes, chip).unwrap();
+            let uart = run_firmware(&board, &clip, &["--icount"]);
+            let measured = stat_on(&uart, "# decode_instructions_total=", "per_frame") as f64;
+            let err = (predicted.instructions_per_pose - measured) / measured;
+            eprintln!(
+                "{board} {}: measured {measured:.0}, predicted {:.0} ({:+.1} %), stack {} (model {})",
+                codec.name(),
+                predicted.instructions_per_pose,
+                err * 100.0,
+                stat(&uart, "playback_stack_bytes"),
+                predicted.playback_stack_bytes
+            );
+            assert!(
+                err.abs() <= 0.15,
+                "{board} {}: predicted {:.0} instructions per pose, measured {measured:.0} ({:+.1} %)",
+                codec.name(),
+                predicted.instructions_per_pose,
+                err * 100.0
+            );
+            worst = worst.max(err.abs());
+            let stack = stat(&uart, "playback_stack_bytes") as usize;
+            assert!(
+                stack <= predicted.playback_stack_bytes,
+                "{board} {}: the playback path took {stack} B of stack, the model says {}",
+                codec.name(),
+                predicted.playback_stack_bytes
+            );
+            // The firmware's player holds `max_channels` words.
+            let capacity = stat(&uart, "max_channels") as usize;
+            assert_eq!(
+                stat(&uart, "state_bytes") as usize,
+                cost::state_bytes(capacity),
+                "{board}: the player's state"
+            );
+            assert!(features.state_words <= capacity);
+        }
+    }
+    eprintln!("worst error {:.1} %", worst * 100.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
