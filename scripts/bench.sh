@@ -17,6 +17,7 @@
 #  6. the readers' throughput and a folder of 500 files (encoder/examples/read_folder.rs).
 #   bash scripts/bench.sh [CLIP.bvh]   (default: $MOCAP_CORPUS/cmu/35_01.bvh)
 #   bash scripts/bench.sh --baselines  (part 5 alone: no QEMU, no cross toolchain)
+#   bash scripts/bench.sh --decode [CLIP.bvh]  (part 2 alone: the decode tables in QEMU)
 #   bash scripts/bench.sh --baselines --write  (the same, and its tables and picture written
 #     into BENCHMARKS.md §1d between its `<!-- bench:... -->` markers and docs/bench_baselines.png)
 #   Failing steps print why (their output is in target/bench/steps.log).
@@ -78,6 +79,82 @@ log="$out/steps.log"
 : >"$log"
 mocap_explain_failure bench.sh "$log"
 
+# Part 2: decode cost in QEMU (-icount shift=0) of one clip on every board, then the 35_01
+# pose tables of every codec (frames and 50 Hz sample_at, the cost model's prediction, the
+# playback stack and the state) and the firmware's flash.
+decode_part() {
+    local clip_src="${1:-$corpus/cmu/35_01.bvh}" channels pca_src board core pc line per worst stack pstack predicted state name us mode extra
+    mocap_logged "$log" "$mocap" encode "$clip_src" -o "$out/clip.mcb" --max-error 1deg
+    channels=$("$mocap" info "$out/clip.mcb" | sed -n 's/.* × \([0-9]*\) channels.*/\1/p')
+    echo "## Decode cost in QEMU (-icount shift=0), $(basename "$clip_src") at 1°, $channels channels"
+    echo
+    echo "| core | board | instructions/frame | instructions/channel/frame | Clip::parse (CRC incl.) | Player::new | stack used B | Player<320> state B |"
+    echo "|---|---|---|---|---|---|---|---|"
+    for board in $(mocap_boards); do
+        core=$(mocap_board_core "$board")
+        bash scripts/firmware.sh run --board "$board" --clip "$out/clip.mcb" --icount 2>>"$log" >"$out/uart-$board.txt" \
+            || { echo "bench.sh: firmware run on $board failed; last lines of $log:" >&2; tail -n 25 "$log" >&2; exit 1; }
+        get() { sed -n "s/.*$1=\([0-9]*\).*/\1/p" "$out/uart-$board.txt" | head -1; }
+        pc=$(sed -n 's/^# decode_instructions_total=.* per_channel_x100=\([0-9]*\).*/\1/p' "$out/uart-$board.txt")
+        echo "| $core | $board | $(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\).*/\1/p' "$out/uart-$board.txt") | $((pc / 100)).$(printf %02d $((pc % 100))) | $(get parse_instructions) | $(get player_new_instructions) | $(get stack_bytes_used) | $(get state_bytes) |"
+    done
+    echo
+    # Per-pose decode cost of one clip on every board's core, frames and 50 Hz sample_at.
+    pose_cost_table() {
+        local clip=$1 tag=$2
+        echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | predicted/pose (\`mocap target cost\`) | playback stack B | state B (`Player<N>`, N the clip needs) | stack used B |"
+        echo "|---|---|---|---|---|---|---|---|---|---|"
+        for board in $(mocap_boards); do
+            core=$(mocap_board_core "$board")
+            for mode in frames:0 "sample_at 50 Hz":20000; do
+                name=${mode%%:*}; us=${mode##*:}
+                extra=(); [ "$us" != 0 ] && extra=(--sample-us "$us")
+                bash scripts/firmware.sh run --board "$board" --clip "$clip" --icount "${extra[@]}" \
+                    2>>"$log" >"$out/uart-$tag-$board-$us.txt" \
+                    || { echo "bench.sh: firmware run on $board ($name) failed; last lines of $log:" >&2; tail -n 25 "$log" >&2; exit 1; }
+                line=$(grep '^# decode_instructions_total=' "$out/uart-$tag-$board-$us.txt")
+                per=$(sed -n 's/.* per_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
+                pc=$(sed -n 's/.* per_channel_x100=\([0-9]*\).*/\1/p' <<<"$line")
+                worst=$(sed -n 's/.* max_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
+                stack=$(sed -n 's/^# stack_bytes_used=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
+                pstack=$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
+                # The model's figures for the board's chip (same name): instructions/pose, state.
+                read -r predicted state < <("$mocap" target cost "$clip" --target "$board" | awk -v b="$board" '$1 == b { print $3, $6 }')
+                [ "$us" = 0 ] || predicted="-"
+                echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $predicted | $pstack | $state | $stack |"
+            done
+        done
+        echo
+    }
+    echo "## index decode cost per pose, frames and sample_at, $(basename "$clip_src") at 1°"
+    echo
+    pose_cost_table "$out/clip.mcb" idx
+    pca_src="$corpus/cmu/35_01.bvh"
+    mocap_logged "$log" "$mocap" encode "$pca_src" -o "$out/pca.mcb" --codec pca-spline --max-error 50mm+arms:10mm
+    echo "## pca-spline decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 50 mm + ARMS 10 mm, $(stat -c %s "$out/pca.mcb") bytes"
+    echo
+    pose_cost_table "$out/pca.mcb" pca
+    mocap_logged "$log" "$mocap" encode "$pca_src" -o "$out/pred.mcb" --codec predictive --max-error 1deg
+    echo "## predictive decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 1°, $(stat -c %s "$out/pred.mcb") bytes"
+    echo
+    pose_cost_table "$out/pred.mcb" pred
+    echo "## Flash (opt-level = \"s\", LTO), same clip"
+    echo
+    echo '```text'
+    for board in $(mocap_boards); do
+        bash scripts/firmware.sh size --board "$board" --clip "$out/clip.mcb" 2>>"$log" | tr '\n' ' '
+        echo
+    done
+    echo '```'
+    echo
+}
+
+if [ "${1:-}" = --decode ]; then
+    shift
+    decode_part "$@"
+    exit 0
+fi
+
 echo "## Rate–distortion (mocap bench)"
 echo
 /usr/bin/time -f "encode wall time for the whole run: %e s" \
@@ -114,70 +191,7 @@ done
 echo '```'
 echo
 
-clip_src="${1:-$corpus/cmu/35_01.bvh}"
-mocap_logged "$log" "$mocap" encode "$clip_src" -o "$out/clip.mcb" --max-error 1deg
-channels=$("$mocap" info "$out/clip.mcb" | sed -n 's/.* × \([0-9]*\) channels.*/\1/p')
-echo "## Decode cost in QEMU (-icount shift=0), $(basename "$clip_src") at 1°, $channels channels"
-echo
-echo "| core | board | instructions/frame | instructions/channel/frame | Clip::parse (CRC incl.) | Player::new | stack used B | Player<320> state B |"
-echo "|---|---|---|---|---|---|---|---|"
-for board in $(mocap_boards); do
-    core=$(mocap_board_core "$board")
-    bash scripts/firmware.sh run --board "$board" --clip "$out/clip.mcb" --icount 2>>"$log" >"$out/uart-$board.txt" \
-        || { echo "bench.sh: firmware run on $board failed; last lines of $log:" >&2; tail -n 25 "$log" >&2; exit 1; }
-    get() { sed -n "s/.*$1=\([0-9]*\).*/\1/p" "$out/uart-$board.txt" | head -1; }
-    pc=$(sed -n 's/^# decode_instructions_total=.* per_channel_x100=\([0-9]*\).*/\1/p' "$out/uart-$board.txt")
-    echo "| $core | $board | $(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\).*/\1/p' "$out/uart-$board.txt") | $((pc / 100)).$(printf %02d $((pc % 100))) | $(get parse_instructions) | $(get player_new_instructions) | $(get stack_bytes_used) | $(get state_bytes) |"
-done
-echo
-# Per-pose decode cost of one clip on every board's core, frames and 50 Hz sample_at.
-pose_cost_table() {
-    local clip=$1 tag=$2
-    echo "| core | board | mode | instructions/pose | instructions/channel/pose | worst pose | predicted/pose (\`mocap target cost\`) | playback stack B | state B (N = channels) | stack used B |"
-    echo "|---|---|---|---|---|---|---|---|---|---|"
-    for board in $(mocap_boards); do
-        core=$(mocap_board_core "$board")
-        for mode in frames:0 "sample_at 50 Hz":20000; do
-            name=${mode%%:*}; us=${mode##*:}
-            extra=(); [ "$us" != 0 ] && extra=(--sample-us "$us")
-            bash scripts/firmware.sh run --board "$board" --clip "$clip" --icount "${extra[@]}" \
-                2>>"$log" >"$out/uart-$tag-$board-$us.txt" \
-                || { echo "bench.sh: firmware run on $board ($name) failed; last lines of $log:" >&2; tail -n 25 "$log" >&2; exit 1; }
-            line=$(grep '^# decode_instructions_total=' "$out/uart-$tag-$board-$us.txt")
-            per=$(sed -n 's/.* per_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
-            pc=$(sed -n 's/.* per_channel_x100=\([0-9]*\).*/\1/p' <<<"$line")
-            worst=$(sed -n 's/.* max_\(frame\|sample\)=\([0-9]*\).*/\2/p' <<<"$line")
-            stack=$(sed -n 's/^# stack_bytes_used=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
-            pstack=$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
-            # The model's figures for the board's chip (same name): instructions/pose, state.
-            read -r predicted state < <("$mocap" target cost "$clip" --target "$board" | awk -v b="$board" '$1 == b { print $3, $6 }')
-            [ "$us" = 0 ] || predicted="-"
-            echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $predicted | $pstack | $state | $stack |"
-        done
-    done
-    echo
-}
-echo "## index decode cost per pose, frames and sample_at, $(basename "$clip_src") at 1°"
-echo
-pose_cost_table "$out/clip.mcb" idx
-pca_src="$corpus/cmu/35_01.bvh"
-mocap_logged "$log" "$mocap" encode "$pca_src" -o "$out/pca.mcb" --codec pca-spline --max-error 50mm+arms:10mm
-echo "## pca-spline decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 50 mm + ARMS 10 mm, $(stat -c %s "$out/pca.mcb") bytes"
-echo
-pose_cost_table "$out/pca.mcb" pca
-mocap_logged "$log" "$mocap" encode "$pca_src" -o "$out/pred.mcb" --codec predictive --max-error 1deg
-echo "## predictive decode cost in QEMU (-icount shift=0), $(basename "$pca_src") at 1°, $(stat -c %s "$out/pred.mcb") bytes"
-echo
-pose_cost_table "$out/pred.mcb" pred
-echo "## Flash (opt-level = \"s\", LTO), same clip"
-echo
-echo '```text'
-for board in $(mocap_boards); do
-    bash scripts/firmware.sh size --board "$board" --clip "$out/clip.mcb" 2>>"$log" | tr '\n' ' '
-    echo
-done
-echo '```'
-echo
+decode_part "$@"
 
 # The show files read ${MOCAP_CORPUS:-…} from their own folder: give them the corpus absolute.
 corpus_abs=$(cd "$corpus" && pwd)
