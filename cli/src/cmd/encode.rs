@@ -125,8 +125,12 @@ fn chip_of(a: &Args) -> super::Result<Option<&'static Chip>> {
 /// A clip made with a chip --target: its predicted cost, checked against the
 /// budget and the chip (servo and marker clips: their one codec).
 fn check_cost(bytes: &[u8], chip: &'static Chip, budget: &Budget) -> super::Result {
-    let cost = target::predict(bytes, chip)?;
+    let cost = target::best_capacity(target::predict_capacities(bytes, chip)?, budget)?;
     print!("{}", super::target::cost_table(std::slice::from_ref(&cost)));
+    println!(
+        "play it with a Player<{}> (the state is {} B)",
+        cost.state_words, cost.state_bytes
+    );
     let over = budget.overruns(&cost);
     if !over.is_empty() {
         return Err(format!(
@@ -278,11 +282,12 @@ fn encode_for(
             |e| e.clone(),
             |k| {
                 format!(
-                    "predicted {:.0} instructions/pose = {:.3}% cpu at {:.0} Hz, ram {} B (state {} + pose {} + stack {}), flash {} B",
+                    "predicted {:.0} instructions/pose = {:.3}% cpu at {:.0} Hz, ram {} B (Player<{}> {} + pose {} + stack {}), flash {} B",
                     k.instructions_per_pose,
                     k.cpu_share * 100.0,
                     k.poses_per_second,
                     k.ram_bytes(),
+                    k.state_words,
                     k.state_bytes,
                     k.pose_bytes,
                     k.playback_stack_bytes,
@@ -308,9 +313,14 @@ fn encode_for(
         )
         .into());
     };
-    candidates
-        .into_iter()
-        .nth(best)
+    let chosen = candidates.into_iter().nth(best);
+    if let Some(Ok(cost)) = chosen.as_ref().map(|c| &c.cost) {
+        println!(
+            "  play it with a Player<{}> (mocap_decoder::Player::<{}>::new; the state is {} B)",
+            cost.state_words, cost.state_words, cost.state_bytes
+        );
+    }
+    chosen
         .and_then(|c| c.encoded.ok())
         .ok_or_else(|| "the chosen clip vanished".into())
 }

@@ -3,7 +3,7 @@
 
 use super::budget::Budget;
 use super::chips::Chip;
-use super::cost::{predict, Cost};
+use super::cost::{predict_capacities, Cost};
 use crate::codec::CodecChoice;
 use crate::encode::{EncodeError, Encoded};
 
@@ -13,7 +13,9 @@ pub struct Candidate {
     pub codec: CodecChoice,
     /// The clip, or why the codec could not make one within the bound.
     pub encoded: Result<Encoded, EncodeError>,
-    /// Predicted cost on the chip (or why there is none).
+    /// Predicted cost on the chip (or why there is none), for the player
+    /// capacity chosen: of those that fit, the fewest instructions; the
+    /// largest when none fits.
     pub cost: Result<Cost, String>,
     /// What goes over the budget or the chip; empty when it fits.
     pub overruns: Vec<String>,
@@ -23,6 +25,24 @@ impl Candidate {
     pub fn fits(&self) -> bool {
         self.encoded.is_ok() && self.cost.is_ok() && self.overruns.is_empty()
     }
+}
+
+/// Of one clip's costs (one per player capacity), the one that fits with
+/// the fewest instructions (the smaller state of equals), else the largest
+/// capacity's.
+pub fn best_capacity(costs: Vec<Cost>, budget: &Budget) -> Result<Cost, String> {
+    let fitting = costs
+        .iter()
+        .filter(|c| budget.overruns(c).is_empty())
+        .min_by(|a, b| {
+            a.instructions_per_pose
+                .total_cmp(&b.instructions_per_pose)
+                .then(a.state_words.cmp(&b.state_words))
+        })
+        .cloned();
+    fitting
+        .or_else(|| costs.last().cloned())
+        .ok_or_else(|| "no cost".to_string())
 }
 
 /// Judges every codec's result on `chip` under `budget`; returns them with
@@ -36,7 +56,9 @@ pub fn choose(
         .into_iter()
         .map(|(codec, encoded)| {
             let cost = match &encoded {
-                Ok(e) => predict(&e.bytes, chip).map_err(|e| e.to_string()),
+                Ok(e) => predict_capacities(&e.bytes, chip)
+                    .map_err(|e| e.to_string())
+                    .and_then(|costs| best_capacity(costs, budget)),
                 Err(e) => Err(e.to_string()),
             };
             let overruns = cost.as_ref().map_or(Vec::new(), |c| budget.overruns(c));
@@ -97,6 +119,35 @@ mod tests {
             assert!(f.x.iter().all(|v| v.is_finite() && *v >= 0.0));
         }
         assert!(Features::of(b"not a clip").is_err());
+    }
+
+    #[test]
+    fn a_ram_budget_takes_a_smaller_pca_spline_player() {
+        let (_, pca) = results().swap_remove(1);
+        let bytes = pca.unwrap().bytes;
+        let chip = chip("microbit").unwrap();
+        let costs = crate::target::predict_capacities(&bytes, chip).unwrap();
+        assert!(costs.len() >= 2, "{costs:?}");
+        for w in costs.windows(2) {
+            // More cache: more state, never more instructions.
+            assert!(w[0].state_words < w[1].state_words);
+            assert!(w[0].instructions_per_pose >= w[1].instructions_per_pose);
+        }
+        let (small, full) = (costs[0].clone(), costs[costs.len() - 1].clone());
+        assert!(small.instructions_per_pose > full.instructions_per_pose);
+        let ram = |bytes| Budget {
+            ram: Some(bytes),
+            ..Budget::default()
+        };
+        // Room for every group: the fewest instructions, in the least state that has them.
+        let best = best_capacity(costs.clone(), &ram(full.ram_bytes())).unwrap();
+        assert_eq!(best.instructions_per_pose, full.instructions_per_pose);
+        assert!(best.state_words <= full.state_words);
+        let best = best_capacity(costs.clone(), &ram(small.ram_bytes())).unwrap();
+        assert_eq!(best.state_words, small.state_words);
+        // Nothing fits: the largest, whose overruns the caller reports.
+        let best = best_capacity(costs, &ram(small.ram_bytes() - 1)).unwrap();
+        assert_eq!(best.state_words, full.state_words);
     }
 
     #[test]

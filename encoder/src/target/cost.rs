@@ -81,8 +81,15 @@ pub struct Features {
     pub frames: u32,
     pub frame_rate_hz: f64,
     pub clip_bytes: usize,
-    /// Words of the player's state the clip needs (`Player<N>`: `N` at least this).
+    /// Words of the player's state (`Player<N>`): what the clip needs, or
+    /// the capacity the features were taken for.
     pub state_words: usize,
+    /// The capacities worth a player for this clip, smallest first: one for
+    /// `index` and `predictive` (what they need); for `pca-spline` every `N`
+    /// at which one more group's slot fits (from the channel count up to
+    /// caching every group; at most 16 of them), a trade of RAM for
+    /// instructions.
+    pub capacities: Vec<usize>,
     /// The model's inputs, per pose ([`CodecKind::feature_names`]).
     pub x: Vec<f64>,
 }
@@ -120,6 +127,7 @@ impl Features {
             frame_rate_hz,
             clip_bytes: bytes.len(),
             state_words: channels,
+            capacities: Vec::new(),
             x: Vec::new(),
         };
         for sec in clip.sections() {
@@ -143,6 +151,7 @@ impl Features {
                             )
                         };
                     out.codec = CodecKind::Index;
+                    out.capacities = vec![channels];
                     out.x = vec![
                         1.0,
                         c,
@@ -156,9 +165,10 @@ impl Features {
                 }
                 consts::SECTION_CODEC_PCA_SPLINE => {
                     let s = pca_spline::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
-                    let need = pca_cache_words(&s);
-                    let words = capacity.unwrap_or(need.max(channels));
+                    let need = pca_cache_words(&s).max(channels);
+                    let words = capacity.unwrap_or(need);
                     out.state_words = words;
+                    out.capacities = pca_capacities(&s, channels, need);
                     out.codec = CodecKind::PcaSpline;
                     out.x = pca_features(&s, channels, f, words);
                     return Ok(out);
@@ -167,6 +177,7 @@ impl Features {
                     let s = predictive::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
                     out.codec = CodecKind::Predictive;
                     out.state_words = s.state_words.max(channels);
+                    out.capacities = vec![out.state_words];
                     out.x = vec![
                         1.0,
                         c,
@@ -208,6 +219,30 @@ fn pca_cache_words(s: &pca_spline::SectionInfo) -> usize {
         })
         .max()
         .unwrap_or(CACHE_HEAD)
+}
+
+/// The capacities at which a `pca-spline` player caches one more group of
+/// some segment (its slots are taken in order), from `channels` (the least
+/// a player holds) to `need` (every group and the constants): at most 16,
+/// evenly picked, always both ends.
+fn pca_capacities(s: &pca_spline::SectionInfo, channels: usize, need: usize) -> Vec<usize> {
+    let mut all = vec![channels, need];
+    for (_, _, per) in &s.segments {
+        let mut words = CACHE_HEAD;
+        for (&n, &(k, _)) in s.group_channels.iter().zip(per) {
+            words += slot_words(n, k);
+            all.push(words.clamp(channels, need));
+        }
+    }
+    all.sort_unstable();
+    all.dedup();
+    if all.len() <= 16 {
+        return all;
+    }
+    let last = all.len() - 1;
+    let mut picked: Vec<usize> = (0..16).map(|i| all[i * last / 15]).collect();
+    picked.dedup();
+    picked
 }
 
 /// The `pca-spline` features with a cache of `words` words: the groups of
@@ -307,6 +342,8 @@ pub struct Cost {
     pub poses_per_second: f64,
     /// Share of the core at its clock, one instruction per cycle.
     pub cpu_share: f64,
+    /// `N` of the `Player<N>` the prediction is for.
+    pub state_words: usize,
     pub state_bytes: usize,
     /// The caller's pose (4 bytes per channel).
     pub pose_bytes: usize,
@@ -336,6 +373,16 @@ pub fn predict(bytes: &[u8], chip: &'static Chip) -> Result<Cost, CostError> {
     predict_features(&Features::of(bytes)?, chip)
 }
 
+/// The cost of the clip `bytes` on `chip` for each capacity worth a player
+/// ([`Features::capacities`]), smallest state first.
+pub fn predict_capacities(bytes: &[u8], chip: &'static Chip) -> Result<Vec<Cost>, CostError> {
+    let full = Features::of(bytes)?;
+    full.capacities
+        .iter()
+        .map(|&n| predict_features(&Features::with_capacity(bytes, Some(n))?, chip))
+        .collect()
+}
+
 /// The cost of a clip of features `f` on `chip`.
 pub fn predict_features(f: &Features, chip: &'static Chip) -> Result<Cost, CostError> {
     let (m, model_core) = model(chip.core, f.codec).ok_or(CostError::NoModel {
@@ -350,6 +397,7 @@ pub fn predict_features(f: &Features, chip: &'static Chip) -> Result<Cost, CostE
         instructions_per_pose: per_pose,
         poses_per_second: f.frame_rate_hz,
         cpu_share,
+        state_words: f.state_words,
         state_bytes: state_bytes(f.state_words),
         pose_bytes: 4 * f.channels,
         playback_stack_bytes: playback_stack_bytes(chip.core, f.codec)
