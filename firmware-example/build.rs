@@ -180,6 +180,12 @@ fn main() {
     // streams encoded here; none otherwise.
     let entropy_bench = whole_number("MOCAP_ENTROPY_BENCH", 0) != 0;
     entropy_streams(entropy_bench, &out_dir);
+    // The player's capacity in words (`Player<N>`; `pca-spline` caches what fits, `mocap encode
+    // --target` picks it under a RAM budget): 320 unless `MOCAP_PLAYER_WORDS`.
+    let player_words = whole_number("MOCAP_PLAYER_WORDS", 320);
+    if player_words == 0 {
+        fail("mocap-firmware: MOCAP_PLAYER_WORDS must be at least 1");
+    }
 
     // ---- the figure: its rig file, compiled into hard limits (src/servo.rs)
     figure(&manifest_dir, &out_dir);
@@ -196,7 +202,9 @@ fn main() {
          /// The output tick at which the simulated e-stop is pressed (`MOCAP_ESTOP_AT_TICK`); 0 never.\n\
          pub const ESTOP_AT_TICK: u32 = {estop_at_tick};\n\
          /// The entropy coder's measurement instead of playback (`MOCAP_ENTROPY_BENCH=1`).\n\
-         pub const ENTROPY_BENCH: bool = {entropy_bench};\n"
+         pub const ENTROPY_BENCH: bool = {entropy_bench};\n\
+         /// Words of the player's state, `Player<N>` (`MOCAP_PLAYER_WORDS`, default 320).\n\
+         pub const PLAYER_WORDS: usize = {player_words};\n"
     );
     write_if_changed(&out_dir.join("config.rs"), config.as_bytes());
 }

@@ -119,7 +119,7 @@ decode_part() {
                 stack=$(sed -n 's/^# stack_bytes_used=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
                 pstack=$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' "$out/uart-$tag-$board-$us.txt")
                 # The model's figures for the board's chip (same name): instructions/pose, state.
-                read -r predicted state < <("$mocap" target cost "$clip" --target "$board" | awk -v b="$board" '$1 == b { print $3, $6 }')
+                read -r predicted state < <("$mocap" target cost "$clip" --target "$board" | awk -v b="$board" '$1 == b { print $3, $7 }')
                 [ "$us" = 0 ] || predicted="-"
                 echo "| $core | $board | $name | $per | $((pc / 100)).$(printf %02d $((pc % 100))) | $worst | $predicted | $pstack | $state | $stack |"
             done

@@ -11,6 +11,8 @@
 #  2. runs every clip in QEMU with -icount shift=0 (scripts/firmware.sh run --icount) on each
 #     board of --boards (fit and checked) and of --check-boards (checked only: a core the model
 #     predicts from another core's fit, the M4F from the M3's), rows into target/cost/measured.tsv;
+#     then every pca-spline clip again with the smallest, the middle and the largest Player<N>
+#     worth building for it (--player-words N, a seventh column: none, some, every group cached);
 #  3. `mocap target fit target/cost/measured.tsv` fits the model per core and codec on the
 #     calibration rows and prints predicted against measured for every row, and the worst error
 #     per set; with --write it rewrites encoder/src/target/calibration.rs (the coefficients the
@@ -102,24 +104,29 @@ encode_clips() {
 # measure_board BOARD ONLY_CHECK: every clip (only the check set if ONLY_CHECK) on BOARD, rows
 # appended to measured.tsv: board core set clip decode_per_pose playback_stack_bytes.
 measure_board() {
-    local board=$1 only_check=$2 core n=0 c set clip log per stack
+    local board=$1 only_check=$2 core n=0 c set clip log words
     core="$(mocap_board_core "$board")"
     for c in "${clips[@]}"; do
         read -r set clip <<<"$c"
         [ -n "$only_check" ] && [ "$set" = fit ] && continue
-        if [ -n "$resume" ] && awk -F'\t' -v b="$board" -v c="$clip" '$1 == b && $4 == c { f = 1 } END { exit !f }' "$tsv"; then
+        if [ -n "$resume" ] && awk -F'\t' -v b="$board" -v c="$clip" '$1 == b && $4 == c && NF == 6 || $1 == b && $4 == c && $0 !~ /_pca-spline_/ { f = 1 } END { exit !f }' "$tsv"; then
             continue
         fi
+        words=""
         if ! log="$(bash scripts/firmware.sh run --board "$board" --clip "$clip" --icount 2>>"$out/firmware.log")"; then
-            # A clip the example firmware's player cannot hold (MAX_CHANNELS words of state) is
-            # not measured; any other failure is.
-            if grep -q '^# error player:.*capacity' <<<"$log"; then
-                echo "cost.sh: $clip on $board: $(grep '^# error' <<<"$log" | head -1 | cut -c3-) (not measured)" >&2
-                continue
+            # A clip the example firmware's 320-word player cannot hold runs again with the
+            # Player<N> it needs (a seventh column), if the board's RAM holds one; any other
+            # failure stops the run.
+            if ! grep -q '^# error player:.*capacity' <<<"$log"; then
+                echo "cost.sh: $clip on $board failed:" >&2
+                grep '^#' <<<"$log" >&2 || true
+                exit 1
             fi
-            echo "cost.sh: $clip on $board failed:" >&2
-            grep '^#' <<<"$log" >&2 || true
-            exit 1
+            words="$("$mocap" target cost "$clip" --target "$board" | awk -v b="$board" '$1 == b { print $6 }')"
+            [ -n "$words" ] || { echo "cost.sh: $clip on $board: no player size from mocap target cost" >&2; exit 1; }
+            measure_player "$board" "$core" "$set" "$clip" "$words"
+            n=$((n + 1))
+            continue
         fi
         per="$(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\) .*/\1/p' <<<"$log")"
         stack="$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' <<<"$log")"
@@ -127,6 +134,61 @@ measure_board() {
         n=$((n + 1))
     done
     echo "cost.sh: $board ($core): $n clips" >&2
+}
+
+# measure_player BOARD CORE SET CLIP WORDS: CLIP with a Player<WORDS>, a row with the seventh
+# column player_words (skipped under --resume if measured). A player the board's RAM cannot hold
+# (capacity_limit) runs where one can on the same core: the microbit's M0 as the lm3s6965
+# firmware built for thumbv6m under `-cpu cortex-m0` (firmware.sh --m0; board lm3s6965-m0,
+# the same instruction counts).
+measure_player() {
+    local board=$1 core=$2 set=$3 clip=$4 words=$5 label=$1 log per stack
+    local run=(--board "$board")
+    if [ "$words" -gt "$(capacity_limit "$board")" ]; then
+        [ "$core" = M0 ] || { echo "cost.sh: $clip on $board: a Player<$words> does not fit (not measured)" >&2; return 0; }
+        label=lm3s6965-m0
+        run=(--board lm3s6965 --m0)
+    fi
+    if [ -n "$resume" ] && awk -F'\t' -v b="$label" -v c="$clip" -v w="$words" '$1 == b && $4 == c && $7 == w { f = 1 } END { exit !f }' "$tsv"; then
+        return 0
+    fi
+    log="$(bash scripts/firmware.sh run "${run[@]}" --clip "$clip" --icount --player-words "$words" 2>>"$out/firmware.log")" \
+        || { echo "cost.sh: $clip on $label with Player<$words> failed:" >&2; grep '^#' <<<"$log" >&2 || true; exit 1; }
+    per="$(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\) .*/\1/p' <<<"$log")"
+    stack="$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' <<<"$log")"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$core" "$set" "$clip" "$per" "$stack" "$words" >>"$tsv"
+}
+
+# measure_capacity BOARD ONLY_CHECK: every pca-spline clip again with other players
+# (`mocap target cost --capacities`): the smallest Player<N> (no group cached), the middle one
+# and the one that caches every group, each that is not the firmware's default 320 words and
+# is at most 2 000 words (measure_player: where the board's RAM holds it).
+measure_capacity() {
+    local board=$1 only_check=$2 core n=0 c set clip words all
+    core="$(mocap_board_core "$board")"
+    for c in "${clips[@]}"; do
+        read -r set clip <<<"$c"
+        [ -n "$only_check" ] && [ "$set" = fit ] && continue
+        case "$clip" in *_pca-spline_*) ;; *) continue ;; esac
+        mapfile -t all < <("$mocap" target cost "$clip" --target "$board" --capacities | awk -v b="$board" '$1 == b { print $6 }')
+        [ "${#all[@]}" -gt 0 ] || continue
+        for words in $(printf '%s\n' "${all[0]}" "${all[$((${#all[@]} / 2))]}" "${all[$((${#all[@]} - 1))]}" | sort -un); do
+            [ "$words" -ne 320 ] && [ "$words" -le 2000 ] || continue
+            measure_player "$board" "$core" "$set" "$clip" "$words"
+            n=$((n + 1))
+        done
+    done
+    echo "cost.sh: $board ($core): $n pca-spline runs with other players" >&2
+}
+
+# capacity_limit BOARD: the largest Player<N> the example firmware runs with on BOARD (its
+# 16 KB microbit holds some 700 words beside the firmware's pose buffer; the others 2 000, the
+# most measured).
+capacity_limit() {
+    case "$1" in
+        microbit) echo 700 ;;
+        *) echo 2000 ;;
+    esac
 }
 
 # board_figures BOARD...: boards.tsv, per board: core, the player's state at the firmware's
@@ -151,6 +213,8 @@ if [ -z "$fit_only" ]; then
         || printf 'board\tcore\tset\tclip\tdecode_per_pose\tplayback_stack_bytes\n' >"$tsv"
     for b in $boards; do measure_board "$b" ""; done
     for b in $check_boards; do measure_board "$b" 1; done
+    for b in $boards; do measure_capacity "$b" ""; done
+    for b in $check_boards; do measure_capacity "$b" 1; done
 fi
 [ -s "$tsv" ] || { echo "cost.sh: no measurements in $tsv (run without --fit-only first)" >&2; exit 2; }
 if [ -z "$fit_only" ] || [ ! -s "$out/boards.tsv" ]; then

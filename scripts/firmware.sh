@@ -35,6 +35,13 @@
 #       (MOCAP_ENTROPY_BENCH=1, firmware-example/src/entropy_bench.rs): it decodes the rANS
 #       streams build.rs encodes (SPEC.md §10) and prints `# entropy ...` lines with the
 #       instructions per symbol (exact with --icount); the clip is not played.
+#       --player-words N sizes the player's state, Player<N> (MOCAP_PLAYER_WORDS; default 320
+#       words): a pca-spline player caches the groups that fit (mocap encode --target picks N).
+#       --m0 (with --board lm3s6965 only; a measurement, not a board): builds the lm3s6965
+#       firmware for thumbv6m and runs it with `-cpu cortex-m0`, the M0's instructions with the
+#       lm3s's 64 KB of RAM, for players the 16 KB microbit cannot hold (scripts/cost.sh; the
+#       counts equal the microbit's where both run: 00_Walk1 pca-spline 5 mm, Player<320>,
+#       346 401 instructions per pose on each).
 #   scripts/firmware.sh size --board B [--clip PATH.mcb] [--sample-us P] [--servo OUTPUT] [--stream]
 #       Builds, then prints key=value lines: text, data, bss, flash_bytes (text+data),
 #       ram_static_bytes (data+bss), flash_clip_bytes, flash_without_clip_bytes,
@@ -96,6 +103,8 @@ POLICY=""
 STREAM_TIMEOUT=""
 ESTOP_AT=""
 ENTROPY_BENCH=""
+M0_ON_LM3S=""
+PLAYER_WORDS=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
@@ -118,6 +127,9 @@ while [ "$#" -gt 0 ]; do
         --estop-at) [ "$#" -ge 2 ] || die "--estop-at needs a tick"; ESTOP_AT="$2"; shift 2 ;;
         --estop-at=*) ESTOP_AT="${1#*=}"; shift ;;
         --entropy-bench) ENTROPY_BENCH=1; shift ;;
+        --m0) M0_ON_LM3S=1; shift ;;
+        --player-words) [ "$#" -ge 2 ] || die "--player-words needs a value"; PLAYER_WORDS="$2"; shift 2 ;;
+        --player-words=*) PLAYER_WORDS="${1#*=}"; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -137,6 +149,10 @@ case "$CMD" in
     *) die "unknown command '$CMD' (build, run, size, boards)" ;;
 esac
 TARGET="$(board_target "$BOARD")"
+if [ -n "$M0_ON_LM3S" ]; then
+    [ "$BOARD" = lm3s6965 ] || die "--m0 runs the lm3s6965 firmware on an M0 core: use --board lm3s6965"
+    TARGET=thumbv6m-none-eabi
+fi
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be a whole number of seconds"
 [ -r "$INPUT" ] || die "--input: cannot read $INPUT"
 [ -n "$STREAM" ] && [ "$CMD" = run ] && [ "$INPUT" = /dev/null ] \
@@ -145,6 +161,7 @@ TARGET="$(board_target "$BOARD")"
 [ -r "$FIGURE" ] || die "--figure: cannot read $FIGURE"
 [ -z "$STREAM_TIMEOUT" ] || [[ "$STREAM_TIMEOUT" =~ ^[0-9]+$ ]] || die "--stream-timeout must be a whole number of ms"
 [ -z "$ESTOP_AT" ] || [[ "$ESTOP_AT" =~ ^[0-9]+$ ]] || die "--estop-at must be a whole number of ticks"
+[ -z "$PLAYER_WORDS" ] || [[ "$PLAYER_WORDS" =~ ^[1-9][0-9]*$ ]] || die "--player-words must be a whole number > 0"
 case "$POLICY" in
     ""|refuse|clamp-if-inside|clamp) ;;
     *) die "--policy must be refuse, clamp-if-inside or clamp, got '$POLICY'" ;;
@@ -196,7 +213,7 @@ build() {
     # not once per board; each board's code goes to the target's own subfolder.
     target_dir="$FW/target/fw"
     elf_dir="$FW/target/$BOARD/elf"
-    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}${ENTROPY_BENCH:+-entropy}.elf"
+    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}${ENTROPY_BENCH:+-entropy}${PLAYER_WORDS:+-w$PLAYER_WORDS}${M0_ON_LM3S:+-m0}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/fw.lock"
     # One build at a time (cargo locks the shared target dir anyway); the ELF is copied out
@@ -207,7 +224,7 @@ build() {
         MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
             MOCAP_FIGURE="$staged_figure" MOCAP_FIGURE_NAME="$FIGURE" MOCAP_POLICY="$POLICY" \
             MOCAP_STREAM_TIMEOUT_MS="$STREAM_TIMEOUT" MOCAP_ESTOP_AT_TICK="$ESTOP_AT" MOCAP_ENTROPY_BENCH="$ENTROPY_BENCH" \
-            CARGO_TARGET_DIR="$target_dir" mocap_cargo "$TARGET" build --release --no-default-features \
+            MOCAP_PLAYER_WORDS="$PLAYER_WORDS" CARGO_TARGET_DIR="$target_dir" mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
         cp "$target_dir/$TARGET/release/mocap-firmware" "$elf.$$"
@@ -220,6 +237,7 @@ run_qemu() {
     local elf="$1" rc=0 qemu_args
     read -r -a qemu_args <<<"$(mocap_board_qemu_args "$BOARD")"
     [ "$ICOUNT" -eq 1 ] && qemu_args+=(-icount shift=0)
+    [ -n "$M0_ON_LM3S" ] && qemu_args=("${qemu_args[@]/cortex-m3/cortex-m0}")
     # No monitor, no display; UART0 (serial0) on stdout, its receiver fed from --input (stdin
     # of QEMU; /dev/null by default, never the caller's terminal).
     timeout -k 10 "$TIMEOUT" "$(mocap_board_qemu "$BOARD")" "${qemu_args[@]}" \

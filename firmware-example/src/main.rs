@@ -30,8 +30,9 @@ use arch::{exit, ticks};
 use board::Uart;
 use text::Text;
 
-/// Channel capacity of the player: enough for a full BVH skeleton.
-const MAX_CHANNELS: usize = 320;
+/// Channel capacity of the player, its state in words (build.rs: `MOCAP_PLAYER_WORDS`, default
+/// 320: enough for a full BVH skeleton).
+const MAX_CHANNELS: usize = config::PLAYER_WORDS;
 
 /// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `clips/demo.mcb`).
 static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));

@@ -106,3 +106,66 @@ fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
     eprintln!("worst error {:.1} %", worst * 100.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `pca-spline` with a player too small to cache every group, and one that
+/// caches them all: the model's figure for each `Player<N>` (the capacities
+/// `mocap encode --target --budget` chooses between) within ±15 % of the
+/// firmware built with `--player-words N`, on the M3.
+#[test]
+fn predicted_cost_follows_the_players_capacity() {
+    if !qemu_available() {
+        return;
+    }
+    let Some(path) = corpus_file("cmu", "35_01.bvh") else {
+        skipped("corpus not found (set MOCAP_CORPUS)");
+        return;
+    };
+    let m = bvh::read_file(&path).unwrap();
+    let opts = EncodeOptions {
+        codec: CodecChoice::PcaSpline,
+        bound: Bound::from_specs(&["5mm".parse::<BoundSpec>().unwrap()]),
+        metres_per_unit: units::detect(&m).metres(),
+        key_interval: None,
+    };
+    let bytes = encode::encode(&m, &opts).unwrap().bytes;
+    let dir = std::env::temp_dir().join(format!("mocap-qemu-capacity-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let clip = dir.join("35_01_pca-spline_5mm.mcb");
+    std::fs::write(&clip, &bytes).unwrap();
+    let full = target::Features::of(&bytes).unwrap();
+    let capacities = [full.capacities[0], *full.capacities.last().unwrap()];
+    assert!(
+        capacities[0] < capacities[1],
+        "the clip should have groups worth caching: capacities {:?}",
+        full.capacities
+    );
+    let chip = target::chip("lm3s6965").unwrap();
+    let mut measured_at = Vec::new();
+    for n in capacities {
+        let f = target::Features::with_capacity(&bytes, Some(n)).unwrap();
+        let predicted = cost::predict_features(&f, chip).unwrap();
+        let words = n.to_string();
+        let uart = run_firmware("lm3s6965", &clip, &["--icount", "--player-words", &words]);
+        assert_eq!(stat(&uart, "max_channels") as usize, n);
+        assert_eq!(stat(&uart, "state_bytes") as usize, cost::state_bytes(n));
+        let measured = stat_on(&uart, "# decode_instructions_total=", "per_frame") as f64;
+        let err = (predicted.instructions_per_pose - measured) / measured;
+        eprintln!(
+            "Player<{n}>: measured {measured:.0}, predicted {:.0} ({:+.1} %)",
+            predicted.instructions_per_pose,
+            err * 100.0
+        );
+        assert!(
+            err.abs() <= 0.15,
+            "Player<{n}>: predicted {:.0} instructions per pose, measured {measured:.0} ({:+.1} %)",
+            predicted.instructions_per_pose,
+            err * 100.0
+        );
+        measured_at.push(measured);
+    }
+    assert!(
+        measured_at[1] < measured_at[0],
+        "caching every group should cost fewer instructions: {measured_at:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

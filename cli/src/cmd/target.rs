@@ -25,6 +25,14 @@ enum Command {
         /// Only these chips (repeatable; default every chip).
         #[arg(long)]
         target: Vec<String>,
+        /// For a `Player<N>` of N words (default: what the clip can use;
+        /// a smaller `pca-spline` player caches fewer groups).
+        #[arg(long, conflicts_with = "capacities")]
+        player: Option<usize>,
+        /// One row per `Player<N>` worth building for the clip, smallest
+        /// first (`pca-spline`: from no group cached to every group cached).
+        #[arg(long)]
+        capacities: bool,
     },
     /// Fit the cost model to measurements (scripts/cost.sh writes them).
     Fit {
@@ -45,12 +53,42 @@ pub fn run(a: Args) -> super::Result {
             print!("{}", list());
             Ok(())
         }
-        Command::Cost { clip, target } => {
+        Command::Cost {
+            clip,
+            target,
+            player,
+            capacities,
+        } => {
             let bytes = read_clip(&clip)?;
             let chips = resolve(&target)?;
+            let at = |n: Option<usize>| {
+                target::Features::with_capacity(&bytes, n)
+                    .map_err(|e| format!("{}: {e}", clip.display()))
+            };
+            let features = at(player)?;
+            if player.is_some_and(|n| n < features.channels) {
+                return Err(format!(
+                    "--player {}: a player holds at least the clip's {} channels",
+                    player.unwrap_or(0),
+                    features.channels
+                )
+                .into());
+            }
+            let all = if capacities {
+                features
+                    .capacities
+                    .iter()
+                    .map(|&n| at(Some(n)))
+                    .collect::<Result<Vec<_>, _>>()?
+            } else {
+                vec![features]
+            };
             let rows: Vec<Cost> = chips
                 .iter()
-                .map(|c| target::predict(&bytes, c))
+                .flat_map(|c| {
+                    all.iter()
+                        .map(move |f| target::cost::predict_features(f, c))
+                })
                 .collect::<Result<_, _>>()
                 .map_err(|e| format!("{}: {e}", clip.display()))?;
             print!("{}", cost_table(&rows));
@@ -98,17 +136,28 @@ fn list() -> String {
 /// One line per chip: the figures of [`Cost`].
 pub fn cost_table(rows: &[Cost]) -> String {
     let mut s = format!(
-        "{:<11} {:<5} {:>10} {:>9} {:>8} {:>7} {:>6} {:>6} {:>8} {:>9}\n",
-        "chip", "core", "instr/pose", "instr/s", "cpu", "state", "pose", "stack", "ram", "flash"
+        "{:<11} {:<5} {:>10} {:>9} {:>8} {:>6} {:>7} {:>6} {:>6} {:>8} {:>9}\n",
+        "chip",
+        "core",
+        "instr/pose",
+        "instr/s",
+        "cpu",
+        "N",
+        "state",
+        "pose",
+        "stack",
+        "ram",
+        "flash"
     );
     for c in rows {
         s += &format!(
-            "{:<11} {:<5} {:>10.0} {:>9.0} {:>7.3}% {:>7} {:>6} {:>6} {:>8} {:>9}{}\n",
+            "{:<11} {:<5} {:>10.0} {:>9.0} {:>7.3}% {:>6} {:>7} {:>6} {:>6} {:>8} {:>9}{}\n",
             c.chip.name,
             c.chip.core.name(),
             c.instructions_per_pose,
             c.instructions_per_pose * c.poses_per_second,
             c.cpu_share * 100.0,
+            c.state_words,
             c.state_bytes,
             c.pose_bytes,
             c.playback_stack_bytes,
@@ -121,7 +170,7 @@ pub fn cost_table(rows: &[Cost]) -> String {
             }
         );
     }
-    s += "instructions per pose at the clip's frame rate, one instruction per cycle; ram = state + pose + playback stack; flash = clip + decoder code\n";
+    s += "instructions per pose at the clip's frame rate, one instruction per cycle; N = words of the Player<N>; ram = state + pose + playback stack; flash = clip + decoder code\n";
     s
 }
 

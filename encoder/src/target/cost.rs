@@ -51,8 +51,11 @@ impl CodecKind {
                 "1",
                 "channels",
                 "cached: sum of k",
+                "cached: groups",
                 "uncached: sum of channels x k",
                 "uncached: groups",
+                "uncached: sum of k",
+                "constants not cached (zigzag varints read per pose)",
                 "key intervals entered x k per pose",
                 "cached, k > 8: sum of channels x k",
             ],
@@ -248,8 +251,10 @@ fn pca_capacities(s: &pca_spline::SectionInfo, channels: usize, need: usize) -> 
 /// The `pca-spline` features with a cache of `words` words: the groups of
 /// each segment are cached in order while their slots fit (as the
 /// player's `prepare`), the rest decoded from their records on every pose
-/// (some 3 400 instructions a group on the M0, whatever its size). Chosen by
-/// their fit on the calibration clips (BENCHMARKS.md §2).
+/// (some 2 300 instructions a group on the M0 and 1 000 more a component),
+/// and the constants cached after the slots if they fit, else decoded on
+/// every pose. Chosen by their fit on the calibration clips (BENCHMARKS.md
+/// §2).
 fn pca_features(
     s: &pca_spline::SectionInfo,
     channels: usize,
@@ -257,6 +262,10 @@ fn pca_features(
     words: usize,
 ) -> Vec<f64> {
     let (mut cached_k, mut uncached_nk, mut uncached_groups, mut entered) = (0.0, 0.0, 0.0, 0.0);
+    let (mut cached_groups, mut uncached_k) = (0.0, 0.0);
+    // The constants are cached after the slots if they fit there, else
+    // decoded from the clip on every pose.
+    let mut uncached_consts = 0.0;
     // Groups of more components than the player's specialised loops (k ≤ 8)
     // take its generic one, slower per channel and component.
     let mut generic_nk = 0.0;
@@ -270,22 +279,33 @@ fn pca_features(
             if fits {
                 free -= size;
                 cached_k += w * k as f64;
+                cached_groups += w;
                 if k > 8 {
                     generic_nk += w * (n * k) as f64;
                 }
             } else {
+                // An uncached group parses its record (n means, k component
+                // descriptors), finds its key interval and reads four key rows
+                // of k components, then n x k basis products.
                 uncached_nk += w * (n * k) as f64;
                 uncached_groups += w;
+                uncached_k += w * k as f64;
             }
             entered += (m * k) as f64 / frames;
+        }
+        if s.consts > free {
+            uncached_consts += w * s.consts as f64;
         }
     }
     vec![
         1.0,
         channels as f64,
         cached_k,
+        cached_groups,
         uncached_nk,
         uncached_groups,
+        uncached_k,
+        uncached_consts,
         entered,
         generic_nk,
     ]
@@ -326,7 +346,9 @@ pub fn model(core: Core, codec: CodecKind) -> Option<(&'static Model, Core)> {
 /// The player's state in bytes for `state_words` words on a 32-bit core:
 /// `size_of::<Player<N>>()` with `N = state_words`.
 pub fn state_bytes(state_words: usize) -> usize {
-    calibration::PLAYER_FIXED_BYTES + 4 * state_words
+    // The player holds 64-bit fields (8-byte aligned on these cores): an
+    // odd number of words is padded.
+    (calibration::PLAYER_FIXED_BYTES + 4 * state_words).next_multiple_of(8)
 }
 
 /// Predicted cost of a clip on a chip.

@@ -18,6 +18,8 @@ pub struct Measurement {
     /// Calibration row (`fit`) or held out (`check`).
     pub fit: bool,
     pub clip: PathBuf,
+    /// `N` of the firmware's `Player<N>`.
+    pub player_words: usize,
     pub features: Features,
     pub decode_per_pose: f64,
     pub playback_stack_bytes: u32,
@@ -46,9 +48,10 @@ pub enum FitError {
 }
 
 /// Reads `measured.tsv` (header `board core set clip decode_per_pose
-/// playback_stack_bytes`), each clip's features from its file (a relative
-/// clip path is taken from the current directory, as the script writes it)
-/// for the player state the board's firmware had (`capacity(board)` words).
+/// playback_stack_bytes [player_words]`), each clip's features from its file
+/// (a relative clip path is taken from the current directory, as the script
+/// writes it) for the player the firmware had: `player_words`, or the
+/// board's default `capacity(board)`.
 pub fn read_measurements(
     path: &Path,
     capacity: impl Fn(&str) -> Option<usize>,
@@ -65,8 +68,10 @@ pub fn read_measurements(
             continue;
         }
         let f: Vec<&str> = line.split('\t').collect();
-        let [board, core, set, clip, per, stack] = f[..] else {
-            return Err(row(format!("{} fields, expected 6", f.len())));
+        let (board, core, set, clip, per, stack, words) = match f[..] {
+            [b, c, s, p, d, k] => (b, c, s, p, d, k, None),
+            [b, c, s, p, d, k, w] => (b, c, s, p, d, k, Some(w)),
+            _ => return Err(row(format!("{} fields, expected 6 or 7", f.len()))),
         };
         let core = Core::from_name(core).ok_or_else(|| row(format!("unknown core '{core}'")))?;
         let fit = match set {
@@ -75,11 +80,16 @@ pub fn read_measurements(
             _ => return Err(row(format!("set '{set}' is neither fit nor check"))),
         };
         let bytes = std::fs::read(clip).map_err(|e| row(format!("{clip}: {e}")))?;
-        let words = capacity(board).ok_or_else(|| {
-            row(format!(
-                "board '{board}' has no player capacity (boards.tsv)"
-            ))
-        })?;
+        let words = match words {
+            Some(w) => w
+                .parse()
+                .map_err(|_| row(format!("player_words '{w}' is not a number")))?,
+            None => capacity(board).ok_or_else(|| {
+                row(format!(
+                    "board '{board}' has no player capacity (boards.tsv)"
+                ))
+            })?,
+        };
         let features = Features::with_capacity(&bytes, Some(words))
             .map_err(|e| row(format!("{clip}: {e}")))?;
         out.push(Measurement {
@@ -87,6 +97,7 @@ pub fn read_measurements(
             core,
             fit,
             clip: clip.into(),
+            player_words: words,
             features,
             decode_per_pose: per
                 .parse()
@@ -132,12 +143,11 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
         let a = DMatrix::from_fn(g.len(), params, |i, j| {
             g[i].features.x.get(j).copied().unwrap_or(0.0) / g[i].decode_per_pose.max(1.0)
         });
-        let b = DVector::from_element(g.len(), 1.0);
-        let coefficients = a
-            .svd(true, true)
-            .solve(&b, 1e-9)
-            .map(|c| c.iter().copied().collect())
-            .unwrap_or_else(|_| vec![0.0; params]);
+        let coefficients = if codec == CodecKind::PcaSpline {
+            nonnegative_solve(&a)
+        } else {
+            solve(&a, &vec![true; params])
+        };
         out.push(Fitted {
             core,
             codec,
@@ -145,6 +155,40 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
         });
     }
     Ok(out)
+}
+
+/// Least squares of `a · c = 1` over the columns `used` (the others 0).
+fn solve(a: &DMatrix<f64>, used: &[bool]) -> Vec<f64> {
+    let cols: Vec<usize> = (0..a.ncols()).filter(|&j| used[j]).collect();
+    let sub = DMatrix::from_fn(a.nrows(), cols.len(), |i, j| a[(i, cols[j])]);
+    let b = DVector::from_element(a.nrows(), 1.0);
+    let mut c = vec![0.0; a.ncols()];
+    if let Ok(x) = sub.svd(true, true).solve(&b, 1e-9) {
+        for (&j, v) in cols.iter().zip(x.iter()) {
+            c[j] = *v;
+        }
+    }
+    c
+}
+
+/// [`solve`] with every coefficient but the constant's (column 0) at least
+/// 0: each is an instruction count per unit of work, and a negative one is
+/// the fit trading features it cannot tell apart on the calibration clips,
+/// which extrapolates badly (the M0's full-cache `pca-spline` players, past
+/// the microbit's RAM). The most negative is dropped and the rest refitted
+/// until none is left (an active-set descent, as Lawson–Hanson's NNLS).
+fn nonnegative_solve(a: &DMatrix<f64>) -> Vec<f64> {
+    let mut used = vec![true; a.ncols()];
+    loop {
+        let c = solve(a, &used);
+        let worst = (1..c.len())
+            .filter(|&j| used[j] && c[j] < 0.0)
+            .min_by(|&i, &j| c[i].total_cmp(&c[j]));
+        match worst {
+            Some(j) => used[j] = false,
+            None => return c,
+        }
+    }
 }
 
 /// The most playback stack measured per core and codec, over every row
@@ -205,7 +249,7 @@ pub fn calibration_source(
 /// instructions per pose of a row (`None`: no model).
 pub fn report(rows: &[Measurement], predict: impl Fn(&Measurement) -> Option<f64>) -> String {
     let mut s = String::from(
-        "Held-out clips (never seen by the fit):\n\n| board | core | clip | channels | measured / pose | predicted | error | playback stack B |\n|---|---|---|---|---|---|---|---|\n",
+        "Held-out clips (never seen by the fit):\n\n| board | core | clip | channels | Player<N> | measured / pose | predicted | error | playback stack B |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     // (core codec) -> [calibration, held out]: rows, worst error.
     let mut worst: BTreeMap<String, [(usize, f64); 2]> = BTreeMap::new();
@@ -225,10 +269,11 @@ pub fn report(rows: &[Measurement], predict: impl Fn(&Measurement) -> Option<f64
         );
         let _ = writeln!(
             s,
-            "| {} | {} | {name} | {} | {:.0} | {p:.0} | {:+.1} % | {} |",
+            "| {} | {} | {name} | {} | {} | {:.0} | {p:.0} | {:+.1} % | {} |",
             r.board,
             r.core,
             r.features.channels,
+            r.player_words,
             r.decode_per_pose,
             err * 100.0,
             r.playback_stack_bytes
