@@ -1,6 +1,6 @@
 //! The Pico firmware's build: the RP2040 memory map (`memory.x`, which cortex-m-rt's `link.x`
-//! INCLUDEs), then the same clip staging and figure as the QEMU firmware, by the same code
-//! (`../build_common.rs`):
+//! INCLUDEs) and the Pico's link arguments, then the same clip staging and figure as the QEMU
+//! firmware, by the same code (`../build_common.rs`):
 //!
 //! - the clip: `$MOCAP_CLIP` (relative paths are relative to this directory), else
 //!   `../clips/demo.mcb`, as `OUT_DIR/clip.mcb`;
@@ -34,6 +34,11 @@ fn main() {
     copy_or_fail(&memory, &out_dir.join("memory.x"), "memory map");
     println!("cargo:rustc-link-search={}", out_dir.display());
     println!("cargo:rerun-if-changed={}", memory.display());
+    // No page alignment of the sections (flash starts right after the 256-byte boot2), and
+    // defmt's table of interned log strings, which stays in the ELF for probe-rs to decode.
+    // cortex-m-rt's -Tlink.x comes from ../.cargo/config.toml's rustflags.
+    println!("cargo:rustc-link-arg-bins=--nmagic");
+    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
 
     build_common::clip(&manifest_dir, &out_dir, &examples.join(DEFAULT_CLIP));
     build_common::figure(&manifest_dir, &out_dir, &examples.join(DEFAULT_FIGURE));
