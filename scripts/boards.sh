@@ -60,11 +60,14 @@ mocap_board_qemu_args() {
 # the board's cargo feature; scripts/check.sh checks that the two agree).
 mocap_board_memory() { _mocap_board_field "$1" '{ print $NF }'; }
 
-# Real boards (no emulator): built, sized and converted to UF2 by scripts/firmware.sh, never run
-# here. Each is its own crate under firmware-example/ (its own workspace and HAL).
-#   board   Rust target           crate (from firmware-example/)  UF2 family (RP2040's)
+# Real boards (no emulator): built and sized by scripts/firmware.sh, never run here. Each is its
+# own crate under firmware-example/ (its own workspace and HAL). The last column is the file for
+# flashing without a probe: a UF2 family ID (the RP2040 boot ROM's drag-and-drop), or `bin`, the
+# flat image from the start of flash (the STM32 ROM's USB DFU: dfu-util).
+#   board      Rust target             crate (from firmware-example/)  image
 MOCAP_HW_BOARD_TABLE='
-pico    thumbv6m-none-eabi    pico                            0xe48bff56
+pico       thumbv6m-none-eabi      pico                            0xe48bff56
+blackpill  thumbv7em-none-eabihf   blackpill                       bin
 '
 
 # mocap_hw_boards: the real boards' names, one per line.

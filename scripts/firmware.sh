@@ -41,13 +41,14 @@
 #       decoder_code_bytes (code of mocap_decoder::*, crc::* and the firmware's out-of-line calls
 #       into the decoder, where LTO inlines it), core_fmt_code_bytes (error messages only),
 #       firmware_own_code_bytes. Stack use is printed by `run` (# stack_bytes_used=).
-#   scripts/firmware.sh build --board pico [--clip PATH.mcb] [--servo pca9685|pwm] [--figure RIG.toml] [--policy P]
-#       A real board (scripts/boards.sh, MOCAP_HW_BOARD_TABLE; its own crate, firmware-example/pico/):
-#       builds the ELF, converts it to UF2 (scripts/uf2.rs) beside it, and prints the size lines
-#       of `size`, then uf2=PATH and uf2_bytes=N, and last the ELF's path. --servo picks the
-#       output (MOCAP_SERVO: pca9685 on I²C0, the default, or pwm on GP0-GP15). `size --board
-#       pico` prints the same without the ELF's path; `run` is refused (no emulator: flash it
-#       with probe-rs or the UF2, firmware-example/pico/README.md).
+#   scripts/firmware.sh build --board pico|blackpill [--clip PATH.mcb] [--servo pca9685|pwm] [--figure RIG.toml] [--policy P]
+#       A real board (scripts/boards.sh, MOCAP_HW_BOARD_TABLE; its own crate, firmware-example/pico/,
+#       firmware-example/blackpill/): builds the ELF and, beside it, the image to flash without a
+#       probe: pico a UF2 (scripts/uf2.rs), blackpill a flat .bin for USB DFU (llvm-objcopy).
+#       Prints the size lines of `size`, then uf2=PATH and uf2_bytes=N (bin=, bin_bytes=), and
+#       last the ELF's path. --servo picks the output (MOCAP_SERVO: pca9685 on I²C, the default,
+#       or pwm). `size` prints the same without the ELF's path; `run` is refused (no emulator:
+#       flash it with probe-rs, the UF2 or DFU, firmware-example/pico/README.md).
 #   scripts/firmware.sh boards
 #       Lists the boards (the table in scripts/boards.sh): name, core, Rust target, emulator, its machine arguments,
 #       memory map.
@@ -56,7 +57,8 @@
 # 3 toolchain or build failure; 124 QEMU timed out.
 #
 # Boards (scripts/boards.sh): lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F),
-# riscv-virt (QEMU virt, RV32IMC); real boards, build and size only: pico (Raspberry Pi Pico, RP2040).
+# riscv-virt (QEMU virt, RV32IMC); real boards, build and size only: pico (Raspberry Pi Pico, RP2040),
+# blackpill (WeAct STM32F411CE).
 # Clip: default firmware-example/clips/demo.mcb.
 # Toolchain: scripts/toolchain.sh (rustup target if installed, else Debian's -Zbuild-std route);
 # it installs missing packages itself (apt-get, root or sudo). Build/toolchain chatter goes to
@@ -243,10 +245,10 @@ build() {
     printf '%s\n' "$elf"
 }
 
-# ---- a real board: its crate's ELF and the UF2 beside it; prints the size lines, uf2=, uf2_bytes=
-# and (build) last the ELF's path
+# ---- a real board: its crate's ELF and the image beside it (UF2, or a flat .bin for DFU); prints
+# the size lines, uf2= and uf2_bytes= (or bin=, bin_bytes=) and (build) last the ELF's path
 hw_build() {
-    local crate target_dir elf_dir elf uf2 lock family
+    local crate target_dir elf_dir elf image lock family
     stage_inputs
     crate="$FW/$HW_CRATE"
     family="$(mocap_hw_board_field "$BOARD" 4)"
@@ -257,7 +259,8 @@ hw_build() {
     target_dir="$FW/target/fw"
     elf_dir="$FW/target/$BOARD/elf"
     elf="$elf_dir/mocap-firmware-$BOARD-$CLIP_SHA-f$FIGURE_SHA${POLICY:+-$POLICY}-${SERVO:-pca9685}.elf"
-    uf2="${elf%.elf}.uf2"
+    if [ "$family" = bin ]; then image="${elf%.elf}.bin"; else image="${elf%.elf}.uf2"; fi
+    command -v llvm-objcopy >/dev/null 2>&1 || mocap_ensure_packages llvm >&2 || true
     mkdir -p "$elf_dir"
     lock="$FW/target/fw.lock"
     (
@@ -268,11 +271,15 @@ hw_build() {
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
         cp "$target_dir/$TARGET/release/mocap-firmware-$BOARD" "$elf.$$"
         mv -f "$elf.$$" "$elf"
-        "$(uf2_tool)" "$elf" "$uf2.$$" --family "$family" || build_failed "UF2 conversion failed for $elf"
-        mv -f "$uf2.$$" "$uf2"
+        if [ "$family" = bin ]; then
+            llvm-objcopy -O binary "$elf" "$image.$$" || build_failed "llvm-objcopy -O binary failed for $elf"
+        else
+            "$(uf2_tool)" "$elf" "$image.$$" --family "$family" || build_failed "UF2 conversion failed for $elf"
+        fi
+        mv -f "$image.$$" "$image"
     ) 9>"$lock" || exit $?
     size_report "$elf"
-    printf 'uf2=%s\nuf2_bytes=%s\n' "$uf2" "$(stat -c %s "$uf2")"
+    printf '%s=%s\n%s_bytes=%s\n' "${image##*.}" "$image" "${image##*.}" "$(stat -c %s "$image")"
     [ "$CMD" = size ] || printf '%s\n' "$elf"
 }
 
