@@ -17,12 +17,14 @@
 //! The figure — the rig file of the mechanism this firmware drives (`$MOCAP_FIGURE`, default
 //! `../assets/rigs/animatronic_demo.toml`) — becomes `OUT_DIR/figure.rs`: its rig table, its
 //! hard limits and the policy for clips made for another rig (`$MOCAP_POLICY`), see
-//! [`figure`].
+//! [`build_common::figure`] (build_common.rs, shared with pico/build.rs).
 
 use std::env;
-use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::exit;
+
+// The clip, the figure and the file helpers, shared with the board firmwares (pico/build.rs).
+mod build_common;
+use build_common::{copy_or_fail, fail, write_if_changed, DEFAULT_CLIP, DEFAULT_FIGURE};
 
 /// (cargo feature, memory map relative to this directory, Rust targets that suit the core)
 const BOARDS: &[(&str, &str, &[&str])] = &[
@@ -56,17 +58,6 @@ const BOARDS: &[(&str, &str, &[&str])] = &[
         ],
     ),
 ];
-
-const DEFAULT_CLIP: &str = "clips/demo.mcb";
-
-fn fail(msg: &str) -> ! {
-    // `cargo:warning` is shown even when the build script's output is not; the exit fails the build.
-    for line in msg.lines() {
-        println!("cargo:warning={line}");
-    }
-    eprintln!("error: {msg}");
-    exit(1);
-}
 
 fn feature_env(feature: &str) -> String {
     format!("CARGO_FEATURE_{}", feature.to_uppercase().replace('-', "_"))
@@ -108,22 +99,7 @@ fn main() {
     println!("cargo:rerun-if-changed={}", memory_src.display());
 
     // ---- clip
-    println!("cargo:rerun-if-env-changed=MOCAP_CLIP");
-    let clip = match env::var_os("MOCAP_CLIP") {
-        Some(path) if !path.is_empty() => manifest_dir.join(path),
-        _ => manifest_dir.join(DEFAULT_CLIP),
-    };
-    // Watch the file even when it is missing, so creating it triggers a new build.
-    println!("cargo:rerun-if-changed={}", clip.display());
-    if !clip.is_file() {
-        fail(&format!(
-            "mocap-firmware: clip to embed not found: {}\n\
-             Set MOCAP_CLIP=/path/to/clip.mcb (made with `mocap encode --target mcu IN -o OUT.mcb`), \
-             or create {DEFAULT_CLIP}. scripts/firmware.sh takes --clip PATH.",
-            clip.display()
-        ));
-    }
-    copy_or_fail(&clip, &out_dir.join("clip.mcb"), "clip");
+    build_common::clip(&manifest_dir, &out_dir, &manifest_dir.join(DEFAULT_CLIP));
 
     // ---- playback mode
     println!("cargo:rerun-if-env-changed=MOCAP_SAMPLE_US");
@@ -188,7 +164,7 @@ fn main() {
     }
 
     // ---- the figure: its rig file, compiled into hard limits (src/servo.rs)
-    figure(&manifest_dir, &out_dir);
+    build_common::figure(&manifest_dir, &out_dir, &manifest_dir.join(DEFAULT_FIGURE));
 
     let config = format!(
         "/// Sampling period in µs (`MOCAP_SAMPLE_US`); 0 plays every frame.\n\
@@ -221,110 +197,6 @@ fn whole_number(name: &str, default: u32) -> u32 {
         }),
         Err(e) => fail(&format!("mocap-firmware: {name}: {e}")),
     }
-}
-
-const DEFAULT_FIGURE: &str = "../assets/rigs/animatronic_demo.toml";
-
-/// `OUT_DIR/figure.rs`, from the figure's rig file (`$MOCAP_FIGURE`, default
-/// [`DEFAULT_FIGURE`]; the TOML `mocap encode --rig` reads) and the policy for clips made for
-/// another rig (`$MOCAP_POLICY`: `refuse`, `clamp-if-inside` (default) or `clamp`, the names of
-/// `mocap play --policy`). The conversion is the encoder's own (`Figure::from_rig`, the one
-/// `mocap play --rig` applies), so host and firmware hold a clip to the same table:
-/// `FIGURE_SERVOS` (the rig table a clip made for this figure carries), `FIGURE_RATE_MHZ`,
-/// `FIGURE_DIGEST` (its rig digest, SPEC.md §3.6), `HARD_LIMITS` (one per output), `POLICY`.
-fn figure(manifest_dir: &Path, out_dir: &Path) {
-    use mocap_encoder::play::{Figure, Policy};
-    use mocap_encoder::rig::Rig;
-
-    println!("cargo:rerun-if-env-changed=MOCAP_FIGURE");
-    println!("cargo:rerun-if-env-changed=MOCAP_POLICY");
-    let path = match env::var_os("MOCAP_FIGURE") {
-        Some(path) if !path.is_empty() => manifest_dir.join(path),
-        _ => manifest_dir.join(DEFAULT_FIGURE),
-    };
-    println!("cargo:rerun-if-changed={}", path.display());
-    // Messages name the file as the user gave it (`MOCAP_FIGURE_NAME`, set by
-    // scripts/firmware.sh, which builds from a copy named by its content).
-    println!("cargo:rerun-if-env-changed=MOCAP_FIGURE_NAME");
-    let name = match env::var("MOCAP_FIGURE_NAME") {
-        Ok(name) if !name.is_empty() => name,
-        _ => path.display().to_string(),
-    };
-    let text = fs::read_to_string(&path).unwrap_or_else(|e| {
-        fail(&format!(
-            "mocap-firmware: cannot read the figure's rig file (MOCAP_FIGURE) {name}: {e}"
-        ))
-    });
-    let rig = Rig::parse(&text, &name).unwrap_or_else(|e| {
-        fail(&format!(
-            "mocap-firmware: the figure's rig file (MOCAP_FIGURE): {e}"
-        ))
-    });
-    let policy = match env::var("MOCAP_POLICY").as_deref().map(str::trim) {
-        Ok("") | Err(env::VarError::NotPresent) => Policy::ClampIfInside,
-        Ok(name) => Policy::from_name(name).unwrap_or_else(|| {
-            fail(&format!(
-                "mocap-firmware: MOCAP_POLICY must be one of {} (or unset: clamp-if-inside), got '{name}'",
-                Policy::ALL.map(|(_, n)| n).join(", ")
-            ))
-        }),
-        Err(e) => fail(&format!("mocap-firmware: MOCAP_POLICY: {e}")),
-    };
-    let figure = Figure::from_rig(&rig, policy);
-    let n = figure.servos.len();
-    // `Debug` of these plain structs is their struct expression.
-    let servos: String = figure
-        .servos
-        .iter()
-        .map(|s| format!("    {s:?},\n"))
-        .collect();
-    let limits: String = figure
-        .limits
-        .iter()
-        .map(|l| format!("    {l:?},\n"))
-        .collect();
-    let code = format!(
-        "// The figure's rig file: {path}\n\
-         /// The figure's name (`[rig] name`).\n\
-         pub const FIGURE_NAME: &str = {name:?};\n\
-         /// The figure's tick rate, millihertz.\n\
-         pub const FIGURE_RATE_MHZ: u32 = {rate};\n\
-         /// The figure's servos as the rig table of a clip made for it holds them.\n\
-         pub static FIGURE_SERVOS: [RigServo; {n}] = [\n{servos}];\n\
-         /// The figure's hard limits, one per output.\n\
-         pub static HARD_LIMITS: [HardLimit; {n}] = [\n{limits}];\n\
-         /// The figure's rig digest (SPEC.md §3.6).\n\
-         pub const FIGURE_DIGEST: u32 = {digest:#010x};\n\
-         /// What to do with a clip made for another rig (`MOCAP_POLICY`).\n\
-         pub const POLICY: Policy = Policy::{policy:?};\n",
-        path = path.display(),
-        name = rig.name,
-        rate = figure.rate_mhz,
-        digest = figure.digest,
-    );
-    write_if_changed(&out_dir.join("figure.rs"), code.as_bytes());
-}
-
-fn write_if_changed(to: &Path, bytes: &[u8]) {
-    // Rewrite only on change: an unchanged copy keeps the firmware from recompiling.
-    if fs::read(to).ok().as_deref() != Some(bytes) {
-        fs::write(to, bytes).unwrap_or_else(|e| {
-            fail(&format!(
-                "mocap-firmware: cannot write {}: {e}",
-                to.display()
-            ))
-        });
-    }
-}
-
-fn copy_or_fail(from: &Path, to: &Path, what: &str) {
-    let bytes = fs::read(from).unwrap_or_else(|e| {
-        fail(&format!(
-            "mocap-firmware: cannot read {what} {}: {e}",
-            from.display()
-        ))
-    });
-    write_if_changed(to, &bytes);
 }
 
 /// `OUT_DIR/entropy_bench.rs`: `STREAMS`, the rANS streams (SPEC.md §10) that

@@ -60,5 +60,28 @@ mocap_board_qemu_args() {
 # the board's cargo feature; scripts/check.sh checks that the two agree).
 mocap_board_memory() { _mocap_board_field "$1" '{ print $NF }'; }
 
+# Real boards (no emulator): built and sized by scripts/firmware.sh, never run here. Each is its
+# own crate under firmware-example/ (its own workspace and HAL). The last column is the file for
+# flashing without a probe: a UF2 family ID (the RP2040 boot ROM's drag-and-drop), or `bin`, the
+# flat image from the start of flash (the STM32 ROM's USB DFU: dfu-util).
+#   board      Rust target             crate (from firmware-example/)  image
+MOCAP_HW_BOARD_TABLE='
+pico       thumbv6m-none-eabi      pico                            0xe48bff56
+blackpill  thumbv7em-none-eabihf   blackpill                       bin
+'
+
+# mocap_hw_boards: the real boards' names, one per line.
+mocap_hw_boards() {
+    awk 'NF { print $1 }' <<<"$MOCAP_HW_BOARD_TABLE"
+}
+
+# mocap_hw_board_field BOARD N: field N of a real board's row (empty, status 1, if BOARD is none).
+mocap_hw_board_field() {
+    local v
+    v="$(awk -v b="$1" -v n="$2" '$1 == b { print $n }' <<<"$MOCAP_HW_BOARD_TABLE")"
+    [ -n "$v" ] || return 1
+    printf '%s\n' "$v"
+}
+
 # The Rust targets of all boards, space-separated.
 MOCAP_FW_TARGETS="$(awk 'NF { printf "%s%s", sep, $3; sep = " " }' <<<"$MOCAP_BOARD_TABLE")"

@@ -1,11 +1,16 @@
 #!/usr/bin/env bash
 # The static checks that CI runs before the tests (scripts/test.sh runs this first):
-#   fmt           cargo fmt --check: the workspace, firmware-example/, decoder-nostd/fuzz/
+#   fmt           cargo fmt --check: the workspace, firmware-example/ and its real boards' crates,
+#                 decoder-nostd/fuzz/
 #   clippy        cargo clippy --workspace --all-targets -- -D warnings
 #   fuzz-clippy   the same for decoder-nostd/fuzz (its own workspace)
 #   boards        the board table (scripts/boards.sh) names the memory maps build.rs uses
 #   fw-clippy-B   cargo clippy -- -D warnings of the firmware for board B, in each build mode
 #                 (frames, sample, servo, stream), through scripts/toolchain.sh's route
+#   hw-clippy-B   the same for a real board's crate (scripts/boards.sh MOCAP_HW_BOARD_TABLE,
+#                 firmware-example/pico/), in each output mode (pca9685, pwm)
+#   hw-build-B    scripts/firmware.sh build --board B: the real board's ELF and its UF2
+#   uf2           the tests of scripts/uf2.rs (rustc --test)
 #   nostd-...     mocap-decoder on thumbv6m-none-eabi with no default features, then each codec
 #                 feature alone, entropy, and defmt; mocap-servo with no default features and pca9685
 #   panic-B       the firmware ELFs of board B (scripts/firmware.sh build, every mode) have no panic machinery
@@ -63,6 +68,10 @@ fmt_all() {
     cargo fmt --all --check || rc=1
     cargo fmt --manifest-path firmware-example/Cargo.toml --check || rc=1
     cargo fmt --manifest-path decoder-nostd/fuzz/Cargo.toml --check || rc=1
+    local b
+    for b in $(mocap_hw_boards); do
+        cargo fmt --manifest-path "firmware-example/$(mocap_hw_board_field "$b" 3)/Cargo.toml" --check || rc=1
+    done
     [ "$rc" -eq 0 ] || echo "formatting differs (above): run cargo fmt in the crate named"
     return "$rc"
 }
@@ -108,6 +117,33 @@ fw_clippy() {
         ) || { echo "clippy failed for board $board, mode ${mode:-frames}"; rc=1; }
     done
     return "$rc"
+}
+
+# ---- a real board's crate: clippy in each output mode (MOCAP_SERVO)
+hw_clippy() {
+    local board="$1" target crate mode rc=0
+    target="$(mocap_hw_board_field "$board" 2)"
+    crate="$(mocap_hw_board_field "$board" 3)"
+    mocap_toolchain_setup "$target" || return 1
+    for mode in pca9685 pwm; do
+        echo "== output: $mode"
+        (
+            cd "firmware-example/$crate"
+            # The QEMU firmware's target dir (scripts/firmware.sh shares it too).
+            export MOCAP_SERVO="$mode" CARGO_TARGET_DIR="../target/fw"
+            mocap_cargo "$target" clippy --release -- -D warnings
+        ) || { echo "clippy failed for board $board, output $mode"; rc=1; }
+    done
+    return "$rc"
+}
+
+hw_build() {
+    bash scripts/firmware.sh build --board "$1"
+}
+
+uf2_tests() {
+    local bin="$MOCAP_REPO_ROOT/target/check/uf2-test"
+    rustc --edition 2021 --test scripts/uf2.rs -o "$bin" && "$bin"
 }
 
 # ---- no_std builds
@@ -250,6 +286,11 @@ step boards boards_agree
 for b in $(mocap_boards); do
     step "fw-clippy-$b" fw_clippy "$b"
 done
+for b in $(mocap_hw_boards); do
+    step "hw-clippy-$b" hw_clippy "$b"
+    step "hw-build-$b" hw_build "$b"
+done
+step uf2 uf2_tests
 step nostd-decoder nostd_build mocap-decoder
 for f in codec-index codec-pca-spline codec-predictive entropy defmt; do
     step "nostd-decoder-$f" nostd_build mocap-decoder --features "$f"

@@ -48,6 +48,14 @@
 #       decoder_code_bytes (code of mocap_decoder::*, crc::* and the firmware's out-of-line calls
 #       into the decoder, where LTO inlines it), core_fmt_code_bytes (error messages only),
 #       firmware_own_code_bytes. Stack use is printed by `run` (# stack_bytes_used=).
+#   scripts/firmware.sh build --board pico|blackpill [--clip PATH.mcb] [--servo pca9685|pwm] [--figure RIG.toml] [--policy P]
+#       A real board (scripts/boards.sh, MOCAP_HW_BOARD_TABLE; its own crate, firmware-example/pico/,
+#       firmware-example/blackpill/): builds the ELF and, beside it, the image to flash without a
+#       probe: pico a UF2 (scripts/uf2.rs), blackpill a flat .bin for USB DFU (llvm-objcopy).
+#       Prints the size lines of `size`, then uf2=PATH and uf2_bytes=N (bin=, bin_bytes=), and
+#       last the ELF's path. --servo picks the output (MOCAP_SERVO: pca9685 on I²C, the default,
+#       or pwm). `size` prints the same without the ELF's path; `run` is refused (no emulator:
+#       flash it with probe-rs, the UF2 or DFU, firmware-example/pico/README.md).
 #   scripts/firmware.sh boards
 #       Lists the boards (the table in scripts/boards.sh): name, core, Rust target, emulator, its machine arguments,
 #       memory map.
@@ -56,7 +64,8 @@
 # 3 toolchain or build failure; 124 QEMU timed out.
 #
 # Boards (scripts/boards.sh): lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F),
-# riscv-virt (QEMU virt, RV32IMC).
+# riscv-virt (QEMU virt, RV32IMC); real boards, build and size only: pico (Raspberry Pi Pico, RP2040),
+# blackpill (WeAct STM32F411CE).
 # Clip: default firmware-example/clips/demo.mcb.
 # Toolchain: scripts/toolchain.sh (rustup target if installed, else Debian's -Zbuild-std route);
 # it installs missing packages itself (apt-get, root or sudo). Build/toolchain chatter goes to
@@ -83,7 +92,8 @@ usage() {
 }
 
 board_target() {
-    mocap_board_target "$1" 2>/dev/null || die "unknown board '$1' (expected: $(mocap_boards | paste -sd' '))"
+    mocap_hw_board_field "$1" 2 2>/dev/null || mocap_board_target "$1" 2>/dev/null \
+        || die "unknown board '$1' (expected: $(mocap_boards | paste -sd' ') $(mocap_hw_boards | paste -sd' '))"
 }
 
 # ---- arguments
@@ -153,6 +163,17 @@ if [ -n "$M0_ON_LM3S" ]; then
     [ "$BOARD" = lm3s6965 ] || die "--m0 runs the lm3s6965 firmware on an M0 core: use --board lm3s6965"
     TARGET=thumbv6m-none-eabi
 fi
+HW_CRATE="$(mocap_hw_board_field "$BOARD" 3 2>/dev/null || true)"
+if [ -n "$HW_CRATE" ]; then
+    [ "$CMD" = run ] && die "board $BOARD is real hardware, not emulated: build it and flash the ELF (probe-rs) or the UF2 (firmware-example/$HW_CRATE/README.md)"
+    [ -z "$SAMPLE_US$STREAM$STREAM_TIMEOUT$ESTOP_AT$ENTROPY_BENCH$PLAYER_WORDS" ] \
+        || die "board $BOARD takes --clip, --servo, --figure and --policy only"
+    [ "$ICOUNT" -eq 0 ] && [ "$INPUT" = /dev/null ] || die "board $BOARD takes --clip, --servo, --figure and --policy only"
+    case "$SERVO" in
+        ""|pca9685|pwm) ;;
+        *) die "--servo for board $BOARD must be pca9685 (default) or pwm, got '$SERVO'" ;;
+    esac
+fi
 [[ "$TIMEOUT" =~ ^[0-9]+$ ]] || die "--timeout must be a whole number of seconds"
 [ -r "$INPUT" ] || die "--input: cannot read $INPUT"
 [ -n "$STREAM" ] && [ "$CMD" = run ] && [ "$INPUT" = /dev/null ] \
@@ -176,37 +197,45 @@ if [ -n "$SAMPLE_US" ]; then
     SAMPLE_US="$((10#$SAMPLE_US))"
 fi
 
-# ---- build: prints the ELF path
-build() {
+# ---- staging: the clip and the figure under names derived from their content (sets CLIP_SHA,
+# STAGED_CLIP, FIGURE_SHA, STAGED_FIGURE)
+stage_inputs() {
     if [ ! -f "$CLIP" ]; then
         if [ "$CLIP" = "$FW/clips/demo.mcb" ]; then
             die "default clip $CLIP not found: pass --clip PATH.mcb (made with: mocap encode --target mcu IN.bvh -o OUT.mcb)"
         fi
         die "clip not found: $CLIP"
     fi
-    local clip_abs sha staged target_dir lock elf_dir elf figure_abs figure_sha staged_figure
+    local clip_abs figure_abs
     clip_abs="$(cd "$(dirname "$CLIP")" && pwd)/$(basename "$CLIP")"
-    sha="$(sha256sum "$clip_abs" | cut -c1-16)"
+    CLIP_SHA="$(sha256sum "$clip_abs" | cut -c1-16)"
     figure_abs="$(cd "$(dirname "$FIGURE")" && pwd)/$(basename "$FIGURE")"
-    figure_sha="$(sha256sum "$figure_abs" | cut -c1-12)"
-
-    mocap_toolchain_setup "$TARGET" >&2 || build_failed "toolchain setup failed (log: $MOCAP_TOOLCHAIN_LOG)"
-    mocap_toolchain_summary >&2
+    FIGURE_SHA="$(sha256sum "$figure_abs" | cut -c1-12)"
 
     # The clip is staged under a name derived from its content: MOCAP_CLIP changes exactly when
     # the bytes do, so cargo reruns build.rs (rerun-if-env-changed) without relying on mtimes.
     mkdir -p "$FW/target/clips"
-    staged="$FW/target/clips/$sha.mcb"
-    if ! cmp -s "$clip_abs" "$staged" 2>/dev/null; then
-        cp "$clip_abs" "$staged.$$" && mv -f "$staged.$$" "$staged"
+    STAGED_CLIP="$FW/target/clips/$CLIP_SHA.mcb"
+    if ! cmp -s "$clip_abs" "$STAGED_CLIP" 2>/dev/null; then
+        cp "$clip_abs" "$STAGED_CLIP.$$" && mv -f "$STAGED_CLIP.$$" "$STAGED_CLIP"
     fi
 
     # The figure too, under its content's name, keeping the file name for the build's messages.
-    mkdir -p "$FW/target/figures/$figure_sha"
-    staged_figure="$FW/target/figures/$figure_sha/$(basename "$FIGURE")"
-    if ! cmp -s "$figure_abs" "$staged_figure" 2>/dev/null; then
-        cp "$figure_abs" "$staged_figure.$$" && mv -f "$staged_figure.$$" "$staged_figure"
+    mkdir -p "$FW/target/figures/$FIGURE_SHA"
+    STAGED_FIGURE="$FW/target/figures/$FIGURE_SHA/$(basename "$FIGURE")"
+    if ! cmp -s "$figure_abs" "$STAGED_FIGURE" 2>/dev/null; then
+        cp "$figure_abs" "$STAGED_FIGURE.$$" && mv -f "$STAGED_FIGURE.$$" "$STAGED_FIGURE"
     fi
+}
+
+# ---- build: prints the ELF path
+build() {
+    local sha staged target_dir lock elf_dir elf figure_sha staged_figure
+    stage_inputs
+    sha="$CLIP_SHA" staged="$STAGED_CLIP" figure_sha="$FIGURE_SHA" staged_figure="$STAGED_FIGURE"
+
+    mocap_toolchain_setup "$TARGET" >&2 || build_failed "toolchain setup failed (log: $MOCAP_TOOLCHAIN_LOG)"
+    mocap_toolchain_summary >&2
 
     # One target dir for every board (and for check.sh's firmware clippy): the host side of the
     # build (the build script and its dependencies, mocap-encoder among them) is compiled once,
@@ -231,6 +260,56 @@ build() {
         mv -f "$elf.$$" "$elf"
     ) 9>"$lock" || exit $? # bash clears `set -e` inside $(build): pass the failure on
     printf '%s\n' "$elf"
+}
+
+# ---- a real board: its crate's ELF and the image beside it (UF2, or a flat .bin for DFU); prints
+# the size lines, uf2= and uf2_bytes= (or bin=, bin_bytes=) and (build) last the ELF's path
+hw_build() {
+    local crate target_dir elf_dir elf image lock family
+    stage_inputs
+    crate="$FW/$HW_CRATE"
+    family="$(mocap_hw_board_field "$BOARD" 4)"
+    mocap_toolchain_setup "$TARGET" >&2 || build_failed "toolchain setup failed (log: $MOCAP_TOOLCHAIN_LOG)"
+    mocap_toolchain_summary >&2
+    # The QEMU boards' target dir: the host side (build.rs with mocap-encoder) is shared, and so is
+    # `core` of the target (build.rs, not rustflags, adds the board's link arguments).
+    target_dir="$FW/target/fw"
+    elf_dir="$FW/target/$BOARD/elf"
+    elf="$elf_dir/mocap-firmware-$BOARD-$CLIP_SHA-f$FIGURE_SHA${POLICY:+-$POLICY}-${SERVO:-pca9685}.elf"
+    if [ "$family" = bin ]; then image="${elf%.elf}.bin"; else image="${elf%.elf}.uf2"; fi
+    command -v llvm-objcopy >/dev/null 2>&1 || mocap_ensure_packages llvm >&2 || true
+    mkdir -p "$elf_dir"
+    lock="$FW/target/fw.lock"
+    (
+        flock -w 1800 9 || build_failed "timed out waiting for $lock"
+        cd "$crate"
+        MOCAP_CLIP="$STAGED_CLIP" MOCAP_SERVO="$SERVO" MOCAP_FIGURE="$STAGED_FIGURE" MOCAP_FIGURE_NAME="$FIGURE" \
+            MOCAP_POLICY="$POLICY" CARGO_TARGET_DIR="$target_dir" mocap_cargo "$TARGET" build --release >&2 \
+            || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
+        cp "$target_dir/$TARGET/release/mocap-firmware-$BOARD" "$elf.$$"
+        mv -f "$elf.$$" "$elf"
+        if [ "$family" = bin ]; then
+            llvm-objcopy -O binary "$elf" "$image.$$" || build_failed "llvm-objcopy -O binary failed for $elf"
+        else
+            "$(uf2_tool)" "$elf" "$image.$$" --family "$family" || build_failed "UF2 conversion failed for $elf"
+        fi
+        mv -f "$image.$$" "$image"
+    ) 9>"$lock" || exit $?
+    size_report "$elf"
+    printf '%s=%s\n%s_bytes=%s\n' "${image##*.}" "$image" "${image##*.}" "$(stat -c %s "$image")"
+    [ "$CMD" = size ] || printf '%s\n' "$elf"
+}
+
+# uf2_tool: prints the path of scripts/uf2.rs built for the host (rebuilt when the source is newer).
+uf2_tool() {
+    local src="$MOCAP_REPO_ROOT/scripts/uf2.rs" tool="$FW/target/uf2-tool/uf2" rustc
+    if [ ! -x "$tool" ] || [ "$src" -nt "$tool" ]; then
+        rustc="$(command -v rustc || printf '%s' "$MOCAP_DEBIAN_RUSTC")"
+        mkdir -p "$(dirname "$tool")"
+        "$rustc" --edition 2021 -O "$src" -o "$tool.$$" >&2 || build_failed "cannot build $src with $rustc"
+        mv -f "$tool.$$" "$tool"
+    fi
+    printf '%s\n' "$tool"
 }
 
 run_qemu() {
@@ -312,7 +391,7 @@ size_report() {
             else if (name ~ /decoder_glue/) glue += size;
             else if (name ~ /(^|[^a-z_])crc::/) crc += size;
             else if (name ~ /core::fmt|FmtAdapter/) fmt += size;
-            else if (name ~ /^mocap_firmware::|^<mocap_firmware::|^main$/) fw += size;
+            else if (name ~ /^<?mocap_firmware(_[a-z0-9]+)?::|^main$/) fw += size;
         }
         END {
             printf "decoder_code_bytes=%d\n", dec + glue + crc;
@@ -322,6 +401,9 @@ size_report() {
         }'
 }
 
+case "$CMD" in
+    build|size) if [ -n "$HW_CRATE" ]; then hw_build; exit 0; fi ;;
+esac
 case "$CMD" in
     build)
         build ;;

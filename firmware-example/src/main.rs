@@ -17,6 +17,7 @@
 mod arch;
 mod board;
 mod entropy_bench;
+mod figure;
 mod servo;
 mod show;
 mod stream;

@@ -24,15 +24,16 @@ use mocap_decoder::{Clip, Player};
 use mocap_servo::output::{MaestroOutput, Pca9685Output, PwmOutput, ServoOutput, Ssc32Output};
 use mocap_servo::pca9685::{self, Address, Pca9685Servos};
 use mocap_servo::record::{DutyRecorder, I2cRecorder, SerialRecorder};
-use mocap_servo::{
-    ssc32, FigureId, Fit, HardLimits, Identity, OutputError, Playback, PlaybackError, ServoBank,
-};
+use mocap_servo::{ssc32, Fit, Identity, OutputError, PlaybackError, ServoBank};
 
 use crate::config::{ESTOP_AT_TICK, SERVO};
 use crate::{decoder_glue, instructions, ticks, Failure, Out};
 
-/// Most servos of a rig in this firmware (as many as a streamed `Pose` carries).
-pub const MAX_SERVOS: usize = mocap_servo::stream::MAX_POSE_SERVOS;
+use crate::figure::{
+    self, Refusal, FIGURE_DIGEST, FIGURE_NAME, FIGURE_SERVOS, HARD_LIMITS, POLICY,
+};
+pub use crate::figure::{Rig, FIGURE_ID, MAX_SERVOS};
+
 /// Words of the servo player's state: at least one per servo; more let `pca-spline` keep its
 /// key-interval cache (SPEC.md §6), which a tick would otherwise recompute.
 pub const PLAYER_WORDS: usize = 128;
@@ -54,37 +55,6 @@ const PCA9685_ADDRESS: u8 = 0x40;
 const TICK_BYTES: usize = ssc32::group_move_max_len(MAX_SERVOS);
 /// I²C record of one tick: 2 + 5 bytes per servo and the driver's MODE1 write.
 const I2C_RECORD_BYTES: usize = 7 * MAX_SERVOS + 8;
-/// The servos of a rig (its `RigServo`s, rate and limits) and the limiter that holds every
-/// pulse to their limits.
-pub type Rig = Playback<MAX_SERVOS>;
-
-/// The figure this firmware drives, compiled in from its rig file by build.rs (`MOCAP_FIGURE`,
-/// `MOCAP_POLICY`): `FIGURE_NAME`, `FIGURE_RATE_MHZ`, `FIGURE_SERVOS` (the rig table of a clip
-/// made for it), `HARD_LIMITS` (per output: pulse range, neutral, speed, acceleration) and
-/// `POLICY` (what to do with a clip made for another rig).
-pub mod figure {
-    use mocap_decoder::RigServo;
-    use mocap_servo::{HardLimit, Policy};
-    include!(concat!(env!("OUT_DIR"), "/figure.rs"));
-}
-use figure::{FIGURE_DIGEST, FIGURE_NAME, FIGURE_RATE_MHZ, FIGURE_SERVOS, HARD_LIMITS, POLICY};
-
-const _: () = assert!(
-    FIGURE_SERVOS.len() <= MAX_SERVOS,
-    "the figure (MOCAP_FIGURE) has more servos than the firmware holds (MAX_SERVOS)"
-);
-
-/// The figure's hard limits: every command of every mode passes them, after the clip's own
-/// limits (`Playback::with_hard_limits`).
-pub const FIGURE: HardLimits<'static> = HardLimits::new(&HARD_LIMITS);
-
-/// The figure's identity: a clip made for it carries its rig table and its rig digest.
-pub const FIGURE_ID: FigureId<'static> = FigureId {
-    rate_mhz: FIGURE_RATE_MHZ,
-    servos: &FIGURE_SERVOS,
-    digest: FIGURE_DIGEST,
-};
-
 fn playback_failure(e: PlaybackError) -> Failure {
     match e {
         PlaybackError::Limits { error, .. } => Failure::ServoCrate("limits", error),
@@ -94,28 +64,21 @@ fn playback_failure(e: PlaybackError) -> Failure {
 }
 
 /// The playback of a servo clip on this figure: the clip's rig table with its own limits, then
-/// the figure's hard limits. A clip made for another rig plays only as [`POLICY`] allows
-/// (else [`Failure::Figure`]); `# figure …` says which case this is.
+/// the figure's hard limits (`crate::figure`). A clip made for another rig plays only as
+/// [`POLICY`] allows (else [`Failure::Figure`]); `# figure …` says which case this is.
 pub fn playback_of(clip: &Clip<'_>, text: &mut Out) -> Result<Rig, Failure> {
-    let table = clip
-        .rig()
-        .ok_or(Failure::Servo("the clip has no rig table"))?;
-    let identity = FIGURE_ID.compare(clip);
-    let rig = Rig::from_rig(table).map_err(playback_failure)?;
-    print_figure(identity, FIGURE.fit(rig.servos()), text);
-    let (rig, _) = rig
-        .with_hard_limits(&FIGURE, identity.is_same(), POLICY)
-        .map_err(playback_failure)?;
-    Ok(rig)
+    let candidate = figure::candidate(clip).map_err(|e| match e {
+        Refusal::NoRigTable => Failure::Servo("the clip has no rig table"),
+        Refusal::Playback(e) => playback_failure(e),
+    })?;
+    print_figure(candidate.identity, candidate.fit, text);
+    candidate.harden().map_err(playback_failure)
 }
 
 /// The figure's own playback (the streaming mode's rig): its servos at its rate, through its
 /// hard limits.
 pub fn figure_playback(text: &mut Out) -> Result<Rig, Failure> {
-    let rig = Rig::new(FIGURE_SERVOS.iter().copied(), FIGURE_RATE_MHZ).map_err(playback_failure)?;
-    let (rig, fit) = rig
-        .with_hard_limits(&FIGURE, true, POLICY)
-        .map_err(playback_failure)?;
+    let (rig, fit) = figure::figure_rig().map_err(playback_failure)?;
     print_figure(Identity::Same, fit, text);
     Ok(rig)
 }

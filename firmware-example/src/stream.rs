@@ -9,7 +9,7 @@
 //!   filled by polling between ticks and QEMU holds bytes back while the UART is full; on a
 //!   board, `Link::pump` is the receive interrupt's body.)
 //! - **Rig.** The servos and their limits are the figure's, compiled in at build time
-//!   (`MOCAP_FIGURE`, `crate::servo::figure`). A streamed clip must carry the figure's rig
+//!   (`MOCAP_FIGURE`, `crate::figure`). A streamed clip must carry the figure's rig
 //!   table, and live poses are held to its limits and hard limits, whatever the host sends.
 //! - **Upload.** `ClipChunk`s are assembled in a fixed RAM buffer
 //!   ([`crate::board::CLIP_BUFFER_BYTES`]) in any order, by `mocap_servo::stream::upload`'s

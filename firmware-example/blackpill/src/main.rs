@@ -1,0 +1,208 @@
+//! mocap-firmware-blackpill: the STM32F411 "Black Pill" (WeAct, STM32F411CEU6) firmware. It plays
+//! the `.mcb` clip embedded in flash on the figure compiled in, paced by TIM5 counting µs, and
+//! logs with defmt over RTT. The playback is the one every real board shares
+//! (`../hw/play.rs`, with the QEMU firmware's `../src/figure.rs`); this file sets up the board.
+//!
+//! The output (`MOCAP_SERVO`): a PCA9685 on I²C1 (SCL PB6, SDA PB7, address 0x40, 400 kHz;
+//! default) or 12 PWM servos at 50 Hz: outputs 0–3 on TIM1 (PA8, PA9, PA10, PA11), 4–7 on TIM3
+//! (PA6, PA7, PB0, PB1), 8–11 on TIM4 (PB6, PB7, PB8, PB9). The LED (PC13, active low) is on while
+//! the clip plays and blinks fast after an error. See README.md (in ../pico/) for flashing.
+#![no_std]
+#![no_main]
+
+// The figure and how a clip's rig is held to it: the QEMU firmware's own file.
+#[path = "../../src/figure.rs"]
+mod figure;
+// The playback every real board shares: clip, figure, pacing, logs.
+#[path = "../../hw/play.rs"]
+mod play;
+
+use core::cell::Cell;
+use core::convert::Infallible;
+
+use cortex_m_rt::entry;
+use defmt::{error, info};
+use defmt_rtt as _;
+use embedded_hal::pwm::SetDutyCycle;
+use mocap_decoder::Clip;
+use mocap_servo::output::{Pca9685Output, PwmOutput};
+use mocap_servo::pca9685::{Address, Pca9685Servos};
+use mocap_servo::ServoBank;
+use panic_probe as _;
+use stm32f4xx_hal::gpio::{Output, Pin, PushPull};
+use stm32f4xx_hal::i2c::I2c;
+use stm32f4xx_hal::timer::CounterUs;
+use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
+
+use play::{Pace, Stop};
+
+/// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `../clips/demo.mcb`).
+static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
+
+/// The servo output, chosen at build time (build.rs: `MOCAP_SERVO`).
+mod config {
+    include!(concat!(env!("OUT_DIR"), "/config.rs"));
+}
+
+/// The Black Pill's crystal, and the core clock it runs at.
+const HSE_MHZ: u32 = 25;
+const SYSCLK_MHZ: u32 = 100;
+/// The PCA9685's I²C address (all address pins low) and the bus clock.
+const PCA9685_ADDRESS: u8 = 0x40;
+const I2C_KHZ: u32 = 400;
+/// PWM: 12 channels (TIM1, TIM3, TIM4, four each) at 50 Hz.
+const PWM_CHANNELS: usize = 12;
+
+type Led = Pin<'C', 13, Output<PushPull>>;
+type PwmChannel<'a> = &'a mut dyn SetDutyCycle<Error = Infallible>;
+
+/// TIM5, a 32-bit timer counting µs, extended to 64 bits on each read (reads come far more often
+/// than its 71-minute wrap).
+struct Micros {
+    counter: CounterUs<pac::TIM5>,
+    last: Cell<u32>,
+    high: Cell<u64>,
+}
+
+/// TIM5 counts 0 ..= u32::MAX - 1 (its auto-reload is the period's ticks minus one).
+const TIM5_WRAP: u64 = u32::MAX as u64;
+
+impl play::Clock for Micros {
+    fn now_us(&self) -> u64 {
+        let now = self.counter.now().ticks();
+        if now < self.last.get() {
+            self.high.set(self.high.get().saturating_add(TIM5_WRAP));
+        }
+        self.last.set(now);
+        self.high.get().saturating_add(u64::from(now))
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    info!(
+        "mocap-firmware-blackpill: clip {=usize} bytes, figure {=str}",
+        CLIP.len(),
+        figure::FIGURE_NAME
+    );
+    let Some(dp) = pac::Peripherals::take() else {
+        error!("peripherals already taken");
+        idle();
+    };
+    let mut rcc = dp
+        .RCC
+        .freeze(Config::hse(HSE_MHZ.MHz()).sysclk(SYSCLK_MHZ.MHz()));
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+    let gpioc = dp.GPIOC.split(&mut rcc);
+    let mut led: Led = gpioc.pc13.into_push_pull_output();
+    led.set_high(); // off (active low)
+
+    let mut counter = dp.TIM5.counter_us(&mut rcc);
+    if counter.start(u32::MAX.micros()).is_err() {
+        error!("TIM5 did not start");
+        idle();
+    }
+    let clock = Micros {
+        counter,
+        last: Cell::new(0),
+        high: Cell::new(0),
+    };
+
+    let clip = match Clip::parse(CLIP) {
+        Ok(clip) => clip,
+        Err(e) => {
+            error!("clip: {}", e);
+            blink(&mut led, &clock);
+        }
+    };
+    let header = clip.header();
+    info!(
+        "clip: {=u32} frames of {=usize} channels, {=u64} ms",
+        header.frame_count(),
+        header.channel_count(),
+        header.duration_us() / 1000
+    );
+
+    led.set_low(); // on
+    let played = if config::OUTPUT_PWM {
+        let (_, (t1c1, t1c2, t1c3, t1c4)) = dp.TIM1.pwm_hz(50.Hz(), &mut rcc);
+        let (_, (t3c1, t3c2, t3c3, t3c4)) = dp.TIM3.pwm_hz(50.Hz(), &mut rcc);
+        let (_, (t4c1, t4c2, t4c3, t4c4)) = dp.TIM4.pwm_hz(50.Hz(), &mut rcc);
+        let mut t1c1 = t1c1.with(gpioa.pa8);
+        let mut t1c2 = t1c2.with(gpioa.pa9);
+        let mut t1c3 = t1c3.with(gpioa.pa10);
+        let mut t1c4 = t1c4.with(gpioa.pa11);
+        let mut t3c1 = t3c1.with(gpioa.pa6);
+        let mut t3c2 = t3c2.with(gpioa.pa7);
+        let mut t3c3 = t3c3.with(gpiob.pb0);
+        let mut t3c4 = t3c4.with(gpiob.pb1);
+        let mut t4c1 = t4c1.with(gpiob.pb6);
+        let mut t4c2 = t4c2.with(gpiob.pb7);
+        let mut t4c3 = t4c3.with(gpiob.pb8);
+        let mut t4c4 = t4c4.with(gpiob.pb9);
+        t1c1.enable();
+        t1c2.enable();
+        t1c3.enable();
+        t1c4.enable();
+        t3c1.enable();
+        t3c2.enable();
+        t3c3.enable();
+        t3c4.enable();
+        t4c1.enable();
+        t4c2.enable();
+        t4c3.enable();
+        t4c4.enable();
+        let channels: [PwmChannel; PWM_CHANNELS] = [
+            &mut t1c1, &mut t1c2, &mut t1c3, &mut t1c4, &mut t3c1, &mut t3c2, &mut t3c3, &mut t3c4,
+            &mut t4c1, &mut t4c2, &mut t4c3, &mut t4c4,
+        ];
+        let bank = ServoBank::new(channels);
+        info!(
+            "output: PWM, 12 channels at 50 Hz (TIM1 PA8-PA11, TIM3 PA6 PA7 PB0 PB1, TIM4 PB6-PB9)"
+        );
+        play::play(&clip, &clock, |outputs| PwmOutput::new(bank, outputs))
+    } else {
+        let i2c = I2c::new(dp.I2C1, (gpiob.pb6, gpiob.pb7), I2C_KHZ.kHz(), &mut rcc);
+        info!(
+            "output: PCA9685 at {=u8:#x} on I2C1 (SCL PB6, SDA PB7, 400 kHz), 50 Hz",
+            PCA9685_ADDRESS
+        );
+        match Pca9685Servos::new(i2c, Address::from(PCA9685_ADDRESS)) {
+            Ok(device) => play::play(&clip, &clock, |outputs| Pca9685Output::new(device, outputs)),
+            Err(_) => {
+                error!("the PCA9685 did not answer: check SCL PB6, SDA PB7 (with pull-ups), VCC 3V3, GND and its address pins");
+                Err(Stop)
+            }
+        }
+    };
+    led.set_high(); // off
+    match played {
+        Ok(()) => {
+            info!("done: every servo at rest; reset the board to play again");
+            idle()
+        }
+        Err(Stop) => blink(&mut led, &clock),
+    }
+}
+
+/// Sleeps for good (the servos hold their last pulses).
+fn idle() -> ! {
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// Blinks the LED at 5 Hz for good: the run stopped on an error (the log says which).
+fn blink(led: &mut Led, clock: &Micros) -> ! {
+    let mut pace = Pace::start(clock);
+    let mut t = 0u64;
+    loop {
+        led.set_low();
+        t = t.saturating_add(100_000);
+        pace.wait_until(t);
+        led.set_high();
+        t = t.saturating_add(100_000);
+        pace.wait_until(t);
+    }
+}

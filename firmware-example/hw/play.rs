@@ -1,0 +1,278 @@
+//! Playback on a real board, shared by the board firmwares (`pico/src/main.rs`, included there
+//! with `#[path]`): the board sets up its clocks, its timer (a [`Clock`]) and its servo output,
+//! then calls [`play`]. The figure is `../src/figure.rs`, the QEMU firmware's own.
+//!
+//! - A servo clip is held to the figure (the policy, then its hard limits) and played through
+//!   `mocap_servo::Playback` at the rig's tick rate, then parked at the figure's limits.
+//! - Any other clip plays its frames at its frame rate, one logged a second, with the servos
+//!   at the figure's neutral.
+//!
+//! Everything is logged with defmt.
+
+use defmt::{error, info, warn};
+use mocap_decoder::{Clip, Player};
+use mocap_servo::output::ServoOutput;
+use mocap_servo::OutputError;
+
+use crate::figure::{self, Refusal, Rig};
+
+/// Words of the servo player's state, as in the QEMU firmware (`servo::PLAYER_WORDS`): one per
+/// servo and `pca-spline`'s key-interval cache.
+pub const PLAYER_WORDS: usize = 128;
+/// Channel capacity of the frame player, as in the QEMU firmware: a full BVH skeleton.
+pub const MAX_CHANNELS: usize = 320;
+
+/// Why the run stopped early (each is logged where it happens).
+pub struct Stop;
+
+/// Builds the output for the servos of the rig that plays `clip` (`make(outputs)`), then plays:
+/// a servo clip on its rig held to the figure, any other clip's frames with the servos at the
+/// figure's neutral.
+pub fn play<O: ServoOutput>(
+    clip: &Clip<'static>,
+    clock: &impl Clock,
+    make: impl FnOnce(&[u16]) -> Result<O, mocap_servo::Error>,
+) -> Result<(), Stop> {
+    let (mut rig, servo_clip) = match figure::candidate(clip) {
+        Ok(candidate) => {
+            info!(
+                "figure {=str}: {=usize} servos, digest {=u32:#010x}, policy {=str}; the clip: {}, {}",
+                figure::FIGURE_NAME,
+                figure::FIGURE_SERVOS.len(),
+                figure::FIGURE_DIGEST,
+                figure::POLICY.name(),
+                candidate.identity,
+                candidate.fit
+            );
+            match candidate.harden() {
+                Ok(rig) => (rig, true),
+                Err(e) => {
+                    error!("figure: {}", e);
+                    return Err(Stop);
+                }
+            }
+        }
+        Err(Refusal::NoRigTable) => {
+            warn!("the clip has no rig table (made without `mocap encode --rig`): its frames play, the servos stay at the figure's neutral");
+            match figure::figure_rig() {
+                Ok((rig, _)) => (rig, false),
+                Err(e) => {
+                    error!("figure: {}", e);
+                    return Err(Stop);
+                }
+            }
+        }
+        Err(Refusal::Playback(e)) => {
+            error!("the clip's rig: {}", e);
+            return Err(Stop);
+        }
+    };
+    let all = rig.outputs();
+    let outputs = all.get(..rig.count()).unwrap_or(&[]);
+    let mut output = make(outputs).map_err(|e| {
+        error!("servo output: {}", e);
+        Stop
+    })?;
+    if servo_clip {
+        servo_ticks(clip, &mut rig, &mut output, clock)
+    } else {
+        // The rig starts at neutral: one write puts every servo there.
+        rig.write(&mut output).map_err(output_failed)?;
+        frames(clip, clock)
+    }
+}
+
+/// Logs a failed output write.
+fn output_failed<E>(e: OutputError<E>) -> Stop {
+    match e {
+        OutputError::Invalid(e) => error!("servo output: {}", e),
+        _ => error!("servo output device failed (PCA9685: I2C error, check the wiring)"),
+    }
+    Stop
+}
+
+/// A board's free-running µs counter (a hardware timer), never wrapping in practice.
+pub trait Clock {
+    fn now_us(&self) -> u64;
+}
+
+/// Deadlines on the board's [`Clock`], from the start of playback.
+pub struct Pace<'t, C: Clock> {
+    clock: &'t C,
+    start_us: u64,
+    /// Deadlines already past when waited for (a tick that overran its period).
+    late: u32,
+}
+
+impl<'t, C: Clock> Pace<'t, C> {
+    pub fn start(clock: &'t C) -> Self {
+        Pace {
+            clock,
+            start_us: clock.now_us(),
+            late: 0,
+        }
+    }
+
+    fn now_us(&self) -> u64 {
+        self.clock.now_us()
+    }
+
+    /// Waits until `t_us` after the start.
+    pub fn wait_until(&mut self, t_us: u64) {
+        let deadline = self.start_us.saturating_add(t_us);
+        if self.now_us() > deadline {
+            self.late = self.late.saturating_add(1);
+        }
+        while self.now_us() < deadline {}
+    }
+}
+
+/// Time of each tick's work (decode, limits, output), µs.
+#[derive(Default)]
+struct Busy {
+    count: u64,
+    total_us: u64,
+    max_us: u64,
+}
+
+impl Busy {
+    fn add(&mut self, us: u64) {
+        self.count = self.count.saturating_add(1);
+        self.total_us = self.total_us.saturating_add(us);
+        self.max_us = self.max_us.max(us);
+    }
+
+    /// `what`: count, mean and worst µs, and the share of a `period_us` period (1/100 %).
+    fn log(&self, what: &str, period_us: u64, late: u32) {
+        let mean = self.total_us.checked_div(self.count).unwrap_or(0);
+        info!(
+            "{=str}: {=u64}, {=u64} us each on average, worst {=u64} us, {=u64}/10000 of the period; {=u32} late",
+            what,
+            self.count,
+            mean,
+            self.max_us,
+            (mean * 10_000).checked_div(period_us).unwrap_or(0),
+            late
+        );
+    }
+}
+
+/// A servo clip at its rig's rate through `output`, then back to rest.
+fn servo_ticks<O: ServoOutput>(
+    clip: &Clip<'static>,
+    rig: &mut Rig,
+    output: &mut O,
+    clock: &impl Clock,
+) -> Result<(), Stop> {
+    let mut player = Player::<PLAYER_WORDS>::new(clip).map_err(|e| {
+        error!("player: {}", e);
+        Stop
+    })?;
+    let n_ticks = rig.tick_count(clip.header().duration_us());
+    let period_us = rig.tick_us(1);
+    // One progress line a second.
+    let per_second = (1_000_000u64.checked_div(period_us).unwrap_or(1)).max(1);
+    info!(
+        "servo clip: {=usize} servos, {=u32} mHz, {=u64} ticks",
+        rig.count(),
+        rig.rate_mhz(),
+        n_ticks
+    );
+    let mut angles = [0i32; PLAYER_WORDS];
+    let mut busy = Busy::default();
+    let mut pace = Pace::start(clock);
+    let mut result = Ok(());
+    for i in 0..n_ticks {
+        let t_us = rig.tick_us(i);
+        pace.wait_until(t_us);
+        let t0 = pace.now_us();
+        if let Err(e) = player.sample_at(t_us, &mut angles) {
+            // Faults end at rest: park below, then stop.
+            error!("decode error at {=u64} ms: {}", t_us / 1000, e);
+            result = Err(Stop);
+            break;
+        }
+        let targets = rig.targets(&angles);
+        rig.tick(&targets, output).map_err(output_failed)?;
+        busy.add(pace.now_us().saturating_sub(t0));
+        if i % per_second == 0 {
+            info!("t={=u64} ms pulses_qus={}", t_us / 1000, rig.held());
+        }
+    }
+    // Back to neutral, one tick per period after the last.
+    let mut k = n_ticks;
+    rig.park(output, |_| {
+        k = k.saturating_add(1);
+        pace.wait_until(rig_tick_us(period_us, k));
+        Ok::<(), OutputError<O::Error>>(())
+    })
+    .map_err(output_failed)?;
+    busy.log("ticks", period_us, pace.late);
+    info!("at rest after {=u64} park ticks", k.saturating_sub(n_ticks));
+    for ((servo, &ticks), &worst) in rig
+        .servos()
+        .iter()
+        .zip(rig.hard_clamps())
+        .zip(rig.hard_worst())
+    {
+        if ticks != 0 {
+            info!(
+                "hard limits changed output {=u16} on {=u32} ticks, at most {=u16} qus",
+                servo.output, ticks, worst
+            );
+        }
+    }
+    result
+}
+
+/// Tick `k`'s time at a period of `period_us` (the park's ticks continue the clip's).
+fn rig_tick_us(period_us: u64, k: u64) -> u64 {
+    period_us.saturating_mul(k)
+}
+
+/// Any clip's frames at its frame rate; one logged a second.
+fn frames(clip: &Clip<'static>, clock: &impl Clock) -> Result<(), Stop> {
+    let header = clip.header();
+    let mut player = Player::<MAX_CHANNELS>::new(clip).map_err(|e| {
+        error!("player: {}", e);
+        Stop
+    })?;
+    let channels = player.channel_count();
+    let frame_ns = u64::from(header.frame_time_ns());
+    let per_second = 1_000_000_000u64.checked_div(frame_ns).unwrap_or(1).max(1);
+    info!(
+        "frames: {=u32} at {=u64} ns each",
+        header.frame_count(),
+        frame_ns
+    );
+    let mut out = [0i32; MAX_CHANNELS];
+    let mut busy = Busy::default();
+    let mut pace = Pace::start(clock);
+    let mut next = 0u64;
+    loop {
+        pace.wait_until(next.saturating_mul(frame_ns) / 1000);
+        let t0 = pace.now_us();
+        match player.next_frame(&mut out) {
+            Ok(Some(index)) => {
+                busy.add(pace.now_us().saturating_sub(t0));
+                if u64::from(index) % per_second == 0 {
+                    let shown = out.get(..channels.min(6)).unwrap_or(&[]);
+                    info!(
+                        "frame {=u32} t={=u64} ms: {} ...",
+                        index,
+                        next.saturating_mul(frame_ns) / 1_000_000,
+                        shown
+                    );
+                }
+                next = next.saturating_add(1);
+            }
+            Ok(None) => break,
+            Err(e) => {
+                error!("decode error at frame {=u64}: {}", next, e);
+                return Err(Stop);
+            }
+        }
+    }
+    busy.log("frames", frame_ns / 1000, pace.late);
+    Ok(())
+}
