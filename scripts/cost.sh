@@ -101,6 +101,13 @@ encode_clips() {
     done
 }
 
+# figures LOG: the firmware's decode instructions per pose and playback stack, tab-separated.
+figures() {
+    printf '%s\t%s' \
+        "$(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\) .*/\1/p' <<<"$1")" \
+        "$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' <<<"$1")"
+}
+
 # measure_board BOARD ONLY_CHECK: every clip (only the check set if ONLY_CHECK) on BOARD, rows
 # appended to measured.tsv: board core set clip decode_per_pose playback_stack_bytes.
 measure_board() {
@@ -128,9 +135,7 @@ measure_board() {
             n=$((n + 1))
             continue
         fi
-        per="$(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\) .*/\1/p' <<<"$log")"
-        stack="$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' <<<"$log")"
-        printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$board" "$core" "$set" "$clip" "$per" "$stack" >>"$tsv"
+        printf '%s\t%s\t%s\t%s\t%s\n' "$board" "$core" "$set" "$clip" "$(figures "$log")" >>"$tsv"
         n=$((n + 1))
     done
     echo "cost.sh: $board ($core): $n clips" >&2
@@ -142,7 +147,7 @@ measure_board() {
 # firmware built for thumbv6m under `-cpu cortex-m0` (firmware.sh --m0; board lm3s6965-m0,
 # the same instruction counts).
 measure_player() {
-    local board=$1 core=$2 set=$3 clip=$4 words=$5 label=$1 log per stack
+    local board=$1 core=$2 set=$3 clip=$4 words=$5 label=$1 log
     local run=(--board "$board")
     if [ "$words" -gt "$(capacity_limit "$board")" ]; then
         [ "$core" = M0 ] || { echo "cost.sh: $clip on $board: a Player<$words> does not fit (not measured)" >&2; return 0; }
@@ -154,9 +159,7 @@ measure_player() {
     fi
     log="$(bash scripts/firmware.sh run "${run[@]}" --clip "$clip" --icount --player-words "$words" 2>>"$out/firmware.log")" \
         || { echo "cost.sh: $clip on $label with Player<$words> failed:" >&2; grep '^#' <<<"$log" >&2 || true; exit 1; }
-    per="$(sed -n 's/^# decode_instructions_total=.* per_frame=\([0-9]*\) .*/\1/p' <<<"$log")"
-    stack="$(sed -n 's/^# .*playback_stack_bytes=\([0-9]*\).*/\1/p' <<<"$log")"
-    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$core" "$set" "$clip" "$per" "$stack" "$words" >>"$tsv"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$core" "$set" "$clip" "$(figures "$log")" "$words" >>"$tsv"
 }
 
 # measure_capacity BOARD ONLY_CHECK: every pca-spline clip again with other players

@@ -22,8 +22,72 @@ pub const PLAYER_WORDS: usize = 128;
 /// Channel capacity of the frame player, as in the QEMU firmware: a full BVH skeleton.
 pub const MAX_CHANNELS: usize = 320;
 
+/// The clip, chosen at build time (`hw/build_board.rs`: `MOCAP_CLIP`, default
+/// `../clips/demo.mcb`).
+pub static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
+
+/// The servo output, chosen at build time (`hw/build_board.rs`: `MOCAP_SERVO`).
+pub mod config {
+    include!(concat!(env!("OUT_DIR"), "/config.rs"));
+}
+
+/// The PCA9685's I²C address (all address pins low).
+pub const PCA9685_ADDRESS: u8 = 0x40;
+
 /// Why the run stopped early (each is logged where it happens).
 pub struct Stop;
+
+/// [`CLIP`] parsed, its header logged.
+#[inline(always)]
+pub fn parse_clip() -> Result<Clip<'static>, Stop> {
+    let clip = Clip::parse(CLIP).map_err(|e| {
+        error!("clip: {}", e);
+        Stop
+    })?;
+    let header = clip.header();
+    info!(
+        "clip: {=u32} frames of {=usize} channels, {=u64} ms",
+        header.frame_count(),
+        header.channel_count(),
+        header.duration_us() / 1000
+    );
+    Ok(clip)
+}
+
+/// After the run: sleeps for good when it played (the servos hold their rest pulses), else
+/// blinks the LED at 5 Hz for good (the log says which error); `light(true)` lights it.
+#[inline(always)]
+pub fn finish(played: Result<(), Stop>, clock: &impl Clock, light: impl FnMut(bool)) -> ! {
+    match played {
+        Ok(()) => {
+            info!("done: every servo at rest; reset the board to play again");
+            idle()
+        }
+        Err(Stop) => blink(clock, light),
+    }
+}
+
+/// Sleeps for good (the servos hold their last pulses).
+pub fn idle() -> ! {
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// Blinks the LED at 5 Hz for good: the run stopped on an error (the log says which).
+#[inline(always)]
+pub fn blink(clock: &impl Clock, mut light: impl FnMut(bool)) -> ! {
+    let mut pace = Pace::start(clock);
+    let mut t = 0u64;
+    loop {
+        light(true);
+        t = t.saturating_add(100_000);
+        pace.wait_until(t);
+        light(false);
+        t = t.saturating_add(100_000);
+        pace.wait_until(t);
+    }
+}
 
 /// Builds the output for the servos of the rig that plays `clip` (`make(outputs)`), then plays:
 /// a servo clip on its rig held to the figure, any other clip's frames with the servos at the

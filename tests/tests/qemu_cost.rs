@@ -29,6 +29,23 @@ fn stat(uart: &str, key: &str) -> u64 {
     stat_on(uart, "#", key)
 }
 
+/// `m` encoded with `codec` under `bound` (bounds joined by `+`, as on the
+/// command line).
+fn encode_with(m: &mocap_encoder::motion::Motion, codec: CodecChoice, bound: &str) -> Vec<u8> {
+    let opts = EncodeOptions {
+        codec,
+        bound: Bound::from_specs(
+            &bound
+                .split('+')
+                .map(|b| b.parse::<BoundSpec>().unwrap())
+                .collect::<Vec<_>>(),
+        ),
+        metres_per_unit: units::detect(m).metres(),
+        key_interval: None,
+    };
+    encode::encode(m, &opts).unwrap().bytes
+}
+
 #[test]
 fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
     if !qemu_available() {
@@ -47,18 +64,7 @@ fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
         (CodecChoice::PcaSpline, "50mm+arms:10mm"),
         (CodecChoice::Predictive, "1deg"),
     ] {
-        let opts = EncodeOptions {
-            codec,
-            bound: Bound::from_specs(
-                &bound
-                    .split('+')
-                    .map(|b| b.parse::<BoundSpec>().unwrap())
-                    .collect::<Vec<_>>(),
-            ),
-            metres_per_unit: units::detect(&m).metres(),
-            key_interval: None,
-        };
-        let bytes = encode::encode(&m, &opts).unwrap().bytes;
+        let bytes = encode_with(&m, codec, bound);
         let clip = dir.join(format!("35_01_{}.mcb", codec.name()));
         std::fs::write(&clip, &bytes).unwrap();
         let features = target::Features::of(&bytes).unwrap();
@@ -121,13 +127,7 @@ fn predicted_cost_follows_the_players_capacity() {
         return;
     };
     let m = bvh::read_file(&path).unwrap();
-    let opts = EncodeOptions {
-        codec: CodecChoice::PcaSpline,
-        bound: Bound::from_specs(&["5mm".parse::<BoundSpec>().unwrap()]),
-        metres_per_unit: units::detect(&m).metres(),
-        key_interval: None,
-    };
-    let bytes = encode::encode(&m, &opts).unwrap().bytes;
+    let bytes = encode_with(&m, CodecChoice::PcaSpline, "5mm");
     let dir = std::env::temp_dir().join(format!("mocap-qemu-capacity-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let clip = dir.join("35_01_pca-spline_5mm.mcb");

@@ -24,7 +24,6 @@ use cortex_m_rt::entry;
 use defmt::{error, info};
 use defmt_rtt as _;
 use embedded_hal::pwm::SetDutyCycle;
-use mocap_decoder::Clip;
 use mocap_servo::output::{Pca9685Output, PwmOutput};
 use mocap_servo::pca9685::{Address, Pca9685Servos};
 use mocap_servo::ServoBank;
@@ -34,21 +33,12 @@ use stm32f4xx_hal::i2c::I2c;
 use stm32f4xx_hal::timer::CounterUs;
 use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 
-use play::{Pace, Stop};
-
-/// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `../clips/demo.mcb`).
-static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
-
-/// The servo output, chosen at build time (build.rs: `MOCAP_SERVO`).
-mod config {
-    include!(concat!(env!("OUT_DIR"), "/config.rs"));
-}
+use play::{idle, Stop};
 
 /// The Black Pill's crystal, and the core clock it runs at.
 const HSE_MHZ: u32 = 25;
 const SYSCLK_MHZ: u32 = 100;
-/// The PCA9685's I²C address (all address pins low) and the bus clock.
-const PCA9685_ADDRESS: u8 = 0x40;
+/// The PCA9685's I²C bus clock.
 const I2C_KHZ: u32 = 400;
 /// PWM: 12 channels (TIM1, TIM3, TIM4, four each) at 50 Hz.
 const PWM_CHANNELS: usize = 12;
@@ -82,7 +72,7 @@ impl play::Clock for Micros {
 fn main() -> ! {
     info!(
         "mocap-firmware-blackpill: clip {=usize} bytes, figure {=str}",
-        CLIP.len(),
+        play::CLIP.len(),
         figure::FIGURE_NAME
     );
     let Some(dp) = pac::Peripherals::take() else {
@@ -109,23 +99,12 @@ fn main() -> ! {
         high: Cell::new(0),
     };
 
-    let clip = match Clip::parse(CLIP) {
-        Ok(clip) => clip,
-        Err(e) => {
-            error!("clip: {}", e);
-            blink(&mut led, &clock);
-        }
+    let Ok(clip) = play::parse_clip() else {
+        play::blink(&clock, |on| light(&mut led, on));
     };
-    let header = clip.header();
-    info!(
-        "clip: {=u32} frames of {=usize} channels, {=u64} ms",
-        header.frame_count(),
-        header.channel_count(),
-        header.duration_us() / 1000
-    );
 
     led.set_low(); // on
-    let played = if config::OUTPUT_PWM {
+    let played = if play::config::OUTPUT_PWM {
         let (_, (t1c1, t1c2, t1c3, t1c4)) = dp.TIM1.pwm_hz(50.Hz(), &mut rcc);
         let (_, (t3c1, t3c2, t3c3, t3c4)) = dp.TIM3.pwm_hz(50.Hz(), &mut rcc);
         let (_, (t4c1, t4c2, t4c3, t4c4)) = dp.TIM4.pwm_hz(50.Hz(), &mut rcc);
@@ -166,9 +145,9 @@ fn main() -> ! {
         let i2c = I2c::new(dp.I2C1, (gpiob.pb6, gpiob.pb7), I2C_KHZ.kHz(), &mut rcc);
         info!(
             "output: PCA9685 at {=u8:#x} on I2C1 (SCL PB6, SDA PB7, 400 kHz), 50 Hz",
-            PCA9685_ADDRESS
+            play::PCA9685_ADDRESS
         );
-        match Pca9685Servos::new(i2c, Address::from(PCA9685_ADDRESS)) {
+        match Pca9685Servos::new(i2c, Address::from(play::PCA9685_ADDRESS)) {
             Ok(device) => play::play(&clip, &clock, |outputs| Pca9685Output::new(device, outputs)),
             Err(_) => {
                 error!("the PCA9685 did not answer: check SCL PB6, SDA PB7 (with pull-ups), VCC 3V3, GND and its address pins");
@@ -177,32 +156,14 @@ fn main() -> ! {
         }
     };
     led.set_high(); // off
-    match played {
-        Ok(()) => {
-            info!("done: every servo at rest; reset the board to play again");
-            idle()
-        }
-        Err(Stop) => blink(&mut led, &clock),
-    }
+    play::finish(played, &clock, |on| light(&mut led, on))
 }
 
-/// Sleeps for good (the servos hold their last pulses).
-fn idle() -> ! {
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-/// Blinks the LED at 5 Hz for good: the run stopped on an error (the log says which).
-fn blink(led: &mut Led, clock: &Micros) -> ! {
-    let mut pace = Pace::start(clock);
-    let mut t = 0u64;
-    loop {
+/// The LED (PC13, active low).
+fn light(led: &mut Led, on: bool) {
+    if on {
         led.set_low();
-        t = t.saturating_add(100_000);
-        pace.wait_until(t);
+    } else {
         led.set_high();
-        t = t.saturating_add(100_000);
-        pace.wait_until(t);
     }
 }

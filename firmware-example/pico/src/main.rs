@@ -31,7 +31,6 @@ use defmt::{error, info};
 use defmt_rtt as _;
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
-use mocap_decoder::Clip;
 use mocap_servo::output::{Pca9685Output, PwmOutput};
 use mocap_servo::pca9685::{Address, Pca9685Servos};
 use mocap_servo::ServoBank;
@@ -43,7 +42,7 @@ use hal::fugit::RateExtU32;
 use hal::gpio::{bank0::Gpio25, FunctionI2C, FunctionSioOutput, Pin, PullDown, PullUp};
 use hal::{pac, pwm, Clock as _};
 
-use play::{Pace, Stop};
+use play::{idle, Stop};
 
 /// The second-stage bootloader for the Pico's W25Q080 flash: the boot ROM runs these first 256
 /// bytes of flash (`.boot2`, memory.x), which set up execute-in-place for the rest.
@@ -51,18 +50,9 @@ use play::{Pace, Stop};
 #[used]
 pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 
-/// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `../clips/demo.mcb`).
-static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
-
-/// The servo output, chosen at build time (build.rs: `MOCAP_SERVO`).
-mod config {
-    include!(concat!(env!("OUT_DIR"), "/config.rs"));
-}
-
 /// The Pico's crystal.
 const XOSC_HZ: u32 = 12_000_000;
-/// The PCA9685's I²C address (all address pins low) and the bus clock.
-const PCA9685_ADDRESS: u8 = 0x40;
+/// The PCA9685's I²C bus clock.
 const I2C_HZ: u32 = 400_000;
 /// PWM: 16 channels (8 slices × A/B) on GP0–GP15; 125 MHz / 100 = 1.25 MHz counts, TOP 24 999:
 /// a 20 ms period (50 Hz) in steps of 0.8 µs.
@@ -77,7 +67,7 @@ type PwmChannel<'a> = &'a mut dyn SetDutyCycle<Error = Infallible>;
 fn main() -> ! {
     info!(
         "mocap-firmware-pico: clip {=usize} bytes, figure {=str}",
-        CLIP.len(),
+        play::CLIP.len(),
         figure::FIGURE_NAME
     );
     let Some(mut pac) = pac::Peripherals::take() else {
@@ -107,23 +97,12 @@ fn main() -> ! {
     let timer = hal::Timer::new(pac.TIMER, &mut pac.RESETS, &clocks);
     let mut led: Led = pins.gpio25.reconfigure();
 
-    let clip = match Clip::parse(CLIP) {
-        Ok(clip) => clip,
-        Err(e) => {
-            error!("clip: {}", e);
-            blink(&mut led, &timer);
-        }
+    let Ok(clip) = play::parse_clip() else {
+        play::blink(&timer, |on| light(&mut led, on));
     };
-    let header = clip.header();
-    info!(
-        "clip: {=u32} frames of {=usize} channels, {=u64} ms",
-        header.frame_count(),
-        header.channel_count(),
-        header.duration_us() / 1000
-    );
 
     let _ = led.set_high();
-    let played = if config::OUTPUT_PWM {
+    let played = if play::config::OUTPUT_PWM {
         let mut slices = pwm::Slices::new(pac.PWM, &mut pac.RESETS);
         servo_slice(&mut slices.pwm0);
         servo_slice(&mut slices.pwm1);
@@ -187,9 +166,9 @@ fn main() -> ! {
         );
         info!(
             "output: PCA9685 at {=u8:#x} on I2C0 (SDA GP16, SCL GP17, 400 kHz), 50 Hz",
-            PCA9685_ADDRESS
+            play::PCA9685_ADDRESS
         );
-        match Pca9685Servos::new(i2c, Address::from(PCA9685_ADDRESS)) {
+        match Pca9685Servos::new(i2c, Address::from(play::PCA9685_ADDRESS)) {
             Ok(device) => play::play(&clip, &timer, |outputs| Pca9685Output::new(device, outputs)),
             Err(_) => {
                 error!("the PCA9685 did not answer: check SDA GP16, SCL GP17, VCC 3V3, GND and its address pins");
@@ -198,13 +177,7 @@ fn main() -> ! {
         }
     };
     let _ = led.set_low();
-    match played {
-        Ok(()) => {
-            info!("done: every servo at rest; reset the board to play again");
-            idle()
-        }
-        Err(Stop) => blink(&mut led, &timer),
-    }
+    play::finish(played, &timer, |on| light(&mut led, on))
 }
 
 /// A PWM slice at 50 Hz for servos ([`PWM_DIV`], [`PWM_TOP`]).
@@ -222,23 +195,7 @@ impl play::Clock for hal::Timer {
     }
 }
 
-/// Sleeps for good (the servos hold their last pulses).
-fn idle() -> ! {
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-/// Blinks the LED at 5 Hz for good: the run stopped on an error (the log says which).
-fn blink(led: &mut Led, timer: &hal::Timer) -> ! {
-    let mut pace = Pace::start(timer);
-    let mut t = 0u64;
-    loop {
-        let _ = led.set_high();
-        t = t.saturating_add(100_000);
-        pace.wait_until(t);
-        let _ = led.set_low();
-        t = t.saturating_add(100_000);
-        pace.wait_until(t);
-    }
+/// The LED (GP25, active high).
+fn light(led: &mut Led, on: bool) {
+    let _ = if on { led.set_high() } else { led.set_low() };
 }
