@@ -12,7 +12,8 @@
 //! with the servo output (`$MOCAP_SERVO`, `const SERVO`) and the streaming mode
 //! (`$MOCAP_STREAM=1`, `const STREAM`), the streaming mode's gap timeout
 //! (`$MOCAP_STREAM_TIMEOUT_MS`, default 500, `const STREAM_TIMEOUT_MS`) and the simulated e-stop
-//! (`$MOCAP_ESTOP_AT_TICK`, `const ESTOP_AT_TICK`).
+//! (`$MOCAP_ESTOP_AT_TICK`, `const ESTOP_AT_TICK`), and the servo mode's power levels (`$MOCAP_POWER`,
+//! `mocap play --power`'s schedule, `const POWER`).
 //!
 //! The figure — the rig file of the mechanism this firmware drives (`$MOCAP_FIGURE`, default
 //! `../assets/rigs/animatronic_demo.toml`) — becomes `OUT_DIR/figure.rs`: its rig table, its
@@ -163,6 +164,23 @@ fn main() {
         fail("mocap-firmware: MOCAP_PLAYER_WORDS must be at least 1");
     }
 
+    // Power levels of the servo mode (`MOCAP_POWER`, `mocap play --power`'s schedule, SPEC.md
+    // §6.1): none unless set.
+    println!("cargo:rerun-if-env-changed=MOCAP_POWER");
+    let power = match env::var("MOCAP_POWER").as_deref().map(str::trim) {
+        Ok("") | Err(env::VarError::NotPresent) => Vec::new(),
+        Ok(v) => mocap_encoder::play::parse_power(v)
+            .unwrap_or_else(|e| fail(&format!("mocap-firmware: MOCAP_POWER: {e}"))),
+        Err(e) => fail(&format!("mocap-firmware: MOCAP_POWER: {e}")),
+    };
+    if !power.is_empty() && servo == 0 {
+        fail("mocap-firmware: MOCAP_POWER sets the servo mode's levels: it needs MOCAP_SERVO");
+    }
+    let power: String = power
+        .iter()
+        .map(|(from_us, level)| format!("({from_us}, {level}), "))
+        .collect();
+
     // ---- the figure: its rig file, compiled into hard limits (src/servo.rs)
     build_common::figure(&manifest_dir, &out_dir, &manifest_dir.join(DEFAULT_FIGURE));
 
@@ -180,7 +198,9 @@ fn main() {
          /// The entropy coder's measurement instead of playback (`MOCAP_ENTROPY_BENCH=1`).\n\
          pub const ENTROPY_BENCH: bool = {entropy_bench};\n\
          /// Words of the player's state, `Player<N>` (`MOCAP_PLAYER_WORDS`, default 320).\n\
-         pub const PLAYER_WORDS: usize = {player_words};\n"
+         pub const PLAYER_WORDS: usize = {player_words};\n\
+         /// The servo mode's power levels (`MOCAP_POWER`): `(from_us, level)`; empty: level 0.\n\
+         pub const POWER: &[(u64, u8)] = &[{power}];\n"
     );
     write_if_changed(&out_dir.join("config.rs"), config.as_bytes());
 }

@@ -37,6 +37,8 @@
 #       instructions per symbol (exact with --icount); the clip is not played.
 #       --player-words N sizes the player's state, Player<N> (MOCAP_PLAYER_WORDS; default 320
 #       words): a pca-spline player caches the groups that fit (mocap encode --target picks N).
+#       --power SCHEDULE (with --servo): the servo mode samples at power levels (MOCAP_POWER,
+#       SPEC.md §6.1), `mocap play --power`'s schedule: LEVEL[@TIME],… e.g. 3 or 0,3@2s,0@4.5s.
 #       --m0 (with --board lm3s6965 only; a measurement, not a board): builds the lm3s6965
 #       firmware for thumbv6m and runs it with `-cpu cortex-m0`, the M0's instructions with the
 #       lm3s's 64 KB of RAM, for players the 16 KB microbit cannot hold (scripts/cost.sh; the
@@ -115,6 +117,7 @@ ESTOP_AT=""
 ENTROPY_BENCH=""
 M0_ON_LM3S=""
 PLAYER_WORDS=""
+POWER=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --board) [ "$#" -ge 2 ] || die "--board needs a value"; BOARD="$2"; shift 2 ;;
@@ -140,6 +143,8 @@ while [ "$#" -gt 0 ]; do
         --m0) M0_ON_LM3S=1; shift ;;
         --player-words) [ "$#" -ge 2 ] || die "--player-words needs a value"; PLAYER_WORDS="$2"; shift 2 ;;
         --player-words=*) PLAYER_WORDS="${1#*=}"; shift ;;
+        --power) [ "$#" -ge 2 ] || die "--power needs a schedule"; POWER="$2"; shift 2 ;;
+        --power=*) POWER="${1#*=}"; shift ;;
         --icount) ICOUNT=1; shift ;;
         --timeout) [ "$#" -ge 2 ] || die "--timeout needs a value"; TIMEOUT="$2"; shift 2 ;;
         --timeout=*) TIMEOUT="${1#*=}"; shift ;;
@@ -166,7 +171,7 @@ fi
 HW_CRATE="$(mocap_hw_board_field "$BOARD" 3 2>/dev/null || true)"
 if [ -n "$HW_CRATE" ]; then
     [ "$CMD" = run ] && die "board $BOARD is real hardware, not emulated: build it and flash the ELF (probe-rs) or the UF2 (firmware-example/$HW_CRATE/README.md)"
-    [ -z "$SAMPLE_US$STREAM$STREAM_TIMEOUT$ESTOP_AT$ENTROPY_BENCH$PLAYER_WORDS" ] \
+    [ -z "$SAMPLE_US$STREAM$STREAM_TIMEOUT$ESTOP_AT$ENTROPY_BENCH$PLAYER_WORDS$POWER" ] \
         || die "board $BOARD takes --clip, --servo, --figure and --policy only"
     [ "$ICOUNT" -eq 0 ] && [ "$INPUT" = /dev/null ] || die "board $BOARD takes --clip, --servo, --figure and --policy only"
     case "$SERVO" in
@@ -182,6 +187,8 @@ fi
 [ -r "$FIGURE" ] || die "--figure: cannot read $FIGURE"
 [ -z "$STREAM_TIMEOUT" ] || [[ "$STREAM_TIMEOUT" =~ ^[0-9]+$ ]] || die "--stream-timeout must be a whole number of ms"
 [ -z "$ESTOP_AT" ] || [[ "$ESTOP_AT" =~ ^[0-9]+$ ]] || die "--estop-at must be a whole number of ticks"
+[ -z "$POWER" ] || [ -n "$SERVO" ] || die "--power sets the servo mode's levels: give --servo too"
+[ -z "$POWER" ] || [[ "$POWER" =~ ^[0-9@.,ms\ ]+$ ]] || die "--power must be LEVEL[@TIME],… (e.g. 3 or 0,3@2s), got '$POWER'"
 [ -z "$PLAYER_WORDS" ] || [[ "$PLAYER_WORDS" =~ ^[1-9][0-9]*$ ]] || die "--player-words must be a whole number > 0"
 case "$POLICY" in
     ""|refuse|clamp-if-inside|clamp) ;;
@@ -242,7 +249,7 @@ build() {
     # not once per board; each board's code goes to the target's own subfolder.
     target_dir="$FW/target/fw"
     elf_dir="$FW/target/$BOARD/elf"
-    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}${ENTROPY_BENCH:+-entropy}${PLAYER_WORDS:+-w$PLAYER_WORDS}${M0_ON_LM3S:+-m0}.elf"
+    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}${ENTROPY_BENCH:+-entropy}${PLAYER_WORDS:+-w$PLAYER_WORDS}${POWER:+-p$(printf %s "$POWER" | sha256sum | cut -c1-8)}${M0_ON_LM3S:+-m0}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/fw.lock"
     # One build at a time (cargo locks the shared target dir anyway); the ELF is copied out
@@ -253,7 +260,7 @@ build() {
         MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
             MOCAP_FIGURE="$staged_figure" MOCAP_FIGURE_NAME="$FIGURE" MOCAP_POLICY="$POLICY" \
             MOCAP_STREAM_TIMEOUT_MS="$STREAM_TIMEOUT" MOCAP_ESTOP_AT_TICK="$ESTOP_AT" MOCAP_ENTROPY_BENCH="$ENTROPY_BENCH" \
-            MOCAP_PLAYER_WORDS="$PLAYER_WORDS" CARGO_TARGET_DIR="$target_dir" mocap_cargo "$TARGET" build --release --no-default-features \
+            MOCAP_PLAYER_WORDS="$PLAYER_WORDS" MOCAP_POWER="$POWER" CARGO_TARGET_DIR="$target_dir" mocap_cargo "$TARGET" build --release --no-default-features \
             --features "board-$BOARD" >&2 \
             || build_failed "cargo build failed for board $BOARD (clip $CLIP)"
         cp "$target_dir/$TARGET/release/mocap-firmware" "$elf.$$"

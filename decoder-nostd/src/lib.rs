@@ -44,6 +44,8 @@ mod frame_time;
 mod header;
 mod missing;
 mod player;
+/// Power-aware sampling (SPEC.md §6.1): a cheaper level at run time, no jump.
+pub mod power;
 mod reader;
 mod rig;
 pub mod show;

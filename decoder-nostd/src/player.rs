@@ -251,7 +251,7 @@ impl<'a, const N: usize> Player<'a, N> {
 /// products: with `d = b − a = hi · 2^16 + lo`, `0 ≤ lo < 2^16`,
 /// `⌊d · frac / 2^16⌋ = hi · frac + ⌊lo · frac / 2^16⌋` (the first term is a
 /// whole multiple of `2^16`), and `|hi · frac| < 2^31`, `lo · frac < 2^32`.
-fn mix(a: i32, b: i32, frac: u32) -> i32 {
+pub(crate) fn mix(a: i32, b: i32, frac: u32) -> i32 {
     let d = b.wrapping_sub(a);
     let hi = (d >> 16).wrapping_mul(frac as i32);
     let lo = ((d as u32 & 0xffff).wrapping_mul(frac) >> 16) as i32;

@@ -4,7 +4,8 @@
 //! byte streams are built here; the CLI writes them to a port or a file,
 //! paced in real time unless `--fast`.
 
-use mocap_decoder::{tick_count, tick_us, Clip, RigServo};
+use mocap_decoder::power::{level_at, LevelSampler, MAX_LEVEL};
+use mocap_decoder::{tick_count, tick_us, Clip, Player, RigServo};
 use mocap_servo::output::{MaestroOutput, ServoOutput, Ssc32Output};
 use mocap_servo::record::{RecordError, SerialRecorder};
 use mocap_servo::{
@@ -14,6 +15,7 @@ use mocap_servo::{
 
 pub use mocap_servo::{FigureId, Fit, Identity, Policy};
 
+use crate::clipfile::HOST_MAX_CHANNELS;
 use crate::rig::{Rig, RigError, Servo, ServoTracks};
 use crate::{clipfile, fixed, servo_clip};
 
@@ -237,10 +239,119 @@ fn rate_mhz(rate_hz: Option<f64>, default_mhz: u32) -> Result<u32, PlayError> {
 
 /// The clip sampled with `sample_at` at every servo tick (the integer
 /// timing the firmware uses: `tick_count`, `tick_us`), `ticks × channels`.
-fn sample_ticks(clip: &Clip<'_>, rate_mhz: u32) -> Result<(usize, Vec<i32>), PlayError> {
+/// With a power schedule (`power`, [`parse_power`]), each tick's level
+/// from it and the poses through `mocap_decoder::power::LevelSampler`,
+/// the firmware's (SPEC.md §6.1).
+fn sample_ticks(
+    clip: &Clip<'_>,
+    rate_mhz: u32,
+    power: &[(u64, u8)],
+) -> Result<(usize, Vec<i32>), PlayError> {
     let count = tick_count(clip.header().duration_us(), rate_mhz);
-    let samples = clipfile::sample_all(clip, (0..count).map(|i| tick_us(i, rate_mhz)))?;
+    if power.is_empty() {
+        let samples = clipfile::sample_all(clip, (0..count).map(|i| tick_us(i, rate_mhz)))?;
+        return Ok((count as usize, samples));
+    }
+    let mut player = Box::new(Player::<HOST_MAX_CHANNELS>::new(clip)?);
+    let mut sampler = Box::new(LevelSampler::<HOST_MAX_CHANNELS>::new(rate_mhz));
+    let mut out = vec![0i32; player.channel_count()];
+    let mut samples = Vec::with_capacity(out.len() * count as usize);
+    for i in 0..count {
+        sampler.set_level(level_at(power, tick_us(i, rate_mhz)));
+        sampler.sample(&mut player, i, &mut out)?;
+        samples.extend_from_slice(&out);
+    }
     Ok((count as usize, samples))
+}
+
+/// What one power level (SPEC.md §6.1) does to a servo clip, against
+/// level 0 (every tick sampled): `mocap target levels`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelError {
+    /// The level: one tick in `2^level` sampled.
+    pub level: u8,
+    /// Poses sampled per second at the clip's rate.
+    pub samples_per_s: f64,
+    /// The largest difference from level 0 of any servo at any tick, degrees of travel.
+    pub max_deg: f64,
+    /// The RMS difference over every servo and tick, degrees.
+    pub rms_deg: f64,
+    /// The largest difference of any pulse target, µs.
+    pub max_pulse_us: f64,
+}
+
+/// Every power level of a servo clip at its rig's rate (or `rate_hz`):
+/// its angles at each level against level 0's.
+pub fn level_errors(clip: &Clip<'_>, rate_hz: Option<f64>) -> Result<Vec<LevelError>, PlayError> {
+    let rig = clip.rig().ok_or(PlayError::NotAServoClip)?;
+    let servos: Vec<RigServo> = rig.servos().collect();
+    let rate_mhz = rate_mhz(rate_hz, rig.rate_mhz())?;
+    let (_, exact) = sample_ticks(clip, rate_mhz, &[])?;
+    let n = servos.len().max(1);
+    (0..=MAX_LEVEL)
+        .map(|level| {
+            let (_, got) = sample_ticks(clip, rate_mhz, &[(0, level)])?;
+            let (mut max, mut sum, mut max_pulse) = (0f64, 0f64, 0f64);
+            for (i, (&g, &e)) in got.iter().zip(&exact).enumerate() {
+                let d = (f64::from(g) - f64::from(e)).abs() / 1000.0;
+                max = max.max(d);
+                sum += d * d;
+                let s = &servos[i % n];
+                let dp = (f64::from(s.pulse_qus(g)) - f64::from(s.pulse_qus(e))).abs() / 4.0;
+                max_pulse = max_pulse.max(dp);
+            }
+            Ok(LevelError {
+                level,
+                samples_per_s: f64::from(rate_mhz) / 1000.0 / f64::from(1u32 << level),
+                max_deg: max,
+                rms_deg: (sum / exact.len().max(1) as f64).sqrt(),
+                max_pulse_us: max_pulse,
+            })
+        })
+        .collect()
+}
+
+/// A power schedule (`mocap play --power`, the firmware's `MOCAP_POWER`):
+/// comma-separated `LEVEL[@TIME]`, TIME in seconds (`2.5`, `2.5s`) or
+/// milliseconds (`300ms`), in increasing time order; a level without a
+/// time starts at 0. Levels 0 (every tick sampled) to
+/// `mocap_decoder::power::MAX_LEVEL` (one tick in 16), SPEC.md §6.1.
+/// Returns `(from_us, level)` pairs.
+pub fn parse_power(text: &str) -> Result<Vec<(u64, u8)>, String> {
+    let mut steps: Vec<(u64, u8)> = Vec::new();
+    for item in text.split(',').map(str::trim) {
+        let (level, time) = match item.split_once('@') {
+            Some((l, t)) => (l.trim(), Some(t.trim())),
+            None => (item, None),
+        };
+        let level: u8 = level
+            .parse()
+            .ok()
+            .filter(|&l| l <= MAX_LEVEL)
+            .ok_or_else(|| format!("power level `{level}` is not 0 to {MAX_LEVEL}"))?;
+        let from_us = match time {
+            None => 0,
+            Some(t) => {
+                let (number, scale) = if let Some(ms) = t.strip_suffix("ms") {
+                    (ms, 1e3)
+                } else {
+                    (t.strip_suffix('s').unwrap_or(t), 1e6)
+                };
+                let seconds: f64 = number
+                    .trim()
+                    .parse()
+                    .ok()
+                    .filter(|v: &f64| v.is_finite() && *v >= 0.0)
+                    .ok_or_else(|| format!("power time `{t}` is not a time (2.5, 2.5s, 300ms)"))?;
+                (seconds * scale).round() as u64
+            }
+        };
+        if steps.last().is_some_and(|&(last, _)| from_us < last) {
+            return Err(format!("power step `{item}` goes back in time"));
+        }
+        steps.push((from_us, level));
+    }
+    Ok(steps)
 }
 
 /// A servo clip's pulse targets at every servo tick, before any limiter:
@@ -259,10 +370,19 @@ pub struct ClipTargets {
 /// The targets of a servo clip (one with a rig table, SPEC.md §3.5) at its
 /// rig's rate or `rate_hz`.
 pub fn servo_clip_targets(clip: &Clip<'_>, rate_hz: Option<f64>) -> Result<ClipTargets, PlayError> {
+    servo_clip_targets_at(clip, rate_hz, &[])
+}
+
+/// [`servo_clip_targets`] at the power levels of a schedule ([`parse_power`]).
+pub fn servo_clip_targets_at(
+    clip: &Clip<'_>,
+    rate_hz: Option<f64>,
+    power: &[(u64, u8)],
+) -> Result<ClipTargets, PlayError> {
     let rig = clip.rig().ok_or(PlayError::NotAServoClip)?;
     let servos: Vec<RigServo> = rig.servos().collect();
     let rate_mhz = rate_mhz(rate_hz, rig.rate_mhz())?;
-    let (count, samples) = sample_ticks(clip, rate_mhz)?;
+    let (count, samples) = sample_ticks(clip, rate_mhz, power)?;
     let n = clip.header().channel_count().max(1);
     let targets = (0..count)
         .map(|i| {
@@ -289,8 +409,21 @@ pub fn servo_clip_stream(
     protocol: Protocol,
     rate_hz: Option<f64>,
 ) -> Result<ServoStream, PlayError> {
-    let t = servo_clip_targets(clip, rate_hz)?;
-    drive(t.targets, &t.servos, t.rate_mhz, protocol, None, None)
+    servo_clip_stream_at(clip, None, protocol, rate_hz, &[])
+}
+
+/// [`servo_clip_stream`] (`figure` `None`) or [`servo_clip_stream_on`], at
+/// the power levels of a schedule ([`parse_power`]).
+pub fn servo_clip_stream_at(
+    clip: &Clip<'_>,
+    figure: Option<&Figure>,
+    protocol: Protocol,
+    rate_hz: Option<f64>,
+    power: &[(u64, u8)],
+) -> Result<ServoStream, PlayError> {
+    let t = servo_clip_targets_at(clip, rate_hz, power)?;
+    let on = figure.map(|f| (f, f.id().compare(clip)));
+    drive(t.targets, &t.servos, t.rate_mhz, protocol, None, on)
 }
 
 /// [`servo_clip_stream`] on a figure's hard limits: every pulse through the
@@ -304,10 +437,7 @@ pub fn servo_clip_stream_on(
     protocol: Protocol,
     rate_hz: Option<f64>,
 ) -> Result<ServoStream, PlayError> {
-    let t = servo_clip_targets(clip, rate_hz)?;
-    let identity = figure.id().compare(clip);
-    let on = (figure, identity);
-    drive(t.targets, &t.servos, t.rate_mhz, protocol, None, Some(on))
+    servo_clip_stream_at(clip, Some(figure), protocol, rate_hz, &[])
 }
 
 /// Samples a motion clip at the rig's rate (or `rate_hz`), maps it through
@@ -320,10 +450,21 @@ pub fn servo_stream(
     protocol: Protocol,
     rate_hz: Option<f64>,
 ) -> Result<ServoStream, PlayError> {
+    servo_stream_at(clip, rig, protocol, rate_hz, &[])
+}
+
+/// [`servo_stream`] at the power levels of a schedule ([`parse_power`]).
+pub fn servo_stream_at(
+    clip: &Clip<'_>,
+    rig: &Rig,
+    protocol: Protocol,
+    rate_hz: Option<f64>,
+    power: &[(u64, u8)],
+) -> Result<ServoStream, PlayError> {
     let rate_mhz = rate_mhz(rate_hz, servo_clip::rate_mhz(rig))?;
     let skeleton = clipfile::skeleton(clip);
     let channels = rig.resolve(&skeleton)?;
-    let (count, samples) = sample_ticks(clip, rate_mhz)?;
+    let (count, samples) = sample_ticks(clip, rate_mhz, power)?;
     let metres_per_unit = f64::from(clip.header().source_unit_nm()) * 1e-9;
     let frame_time = 1000.0 / f64::from(rate_mhz);
     let motion = fixed::from_fixed(&skeleton, frame_time, &samples, metres_per_unit);

@@ -85,6 +85,16 @@ mod decoder_glue {
     ) -> Result<(), Error> {
         player.sample_at(t_us, out)
     }
+
+    #[inline(never)]
+    pub fn sample_level<const C: usize, const N: usize>(
+        levels: &mut mocap_decoder::power::LevelSampler<C>,
+        player: &mut Player<'_, N>,
+        tick: u64,
+        out: &mut [i32; N],
+    ) -> Result<(), Error> {
+        levels.sample(player, tick, out)
+    }
 }
 
 /// Instructions executed by [`arch::spin`] in the calibration (2 per iteration).

@@ -20,13 +20,14 @@
 //! Modes: [`FlashClip`] plays the clip embedded in flash (`MOCAP_SERVO` alone); the streaming
 //! mode (`MOCAP_STREAM`, `src/stream.rs`) drives the same [`Driver`] from UART frames.
 
+use mocap_decoder::power::{level_at, LevelSampler};
 use mocap_decoder::{Clip, Player};
 use mocap_servo::output::{MaestroOutput, Pca9685Output, PwmOutput, ServoOutput, Ssc32Output};
 use mocap_servo::pca9685::{self, Address, Pca9685Servos};
 use mocap_servo::record::{DutyRecorder, I2cRecorder, SerialRecorder};
 use mocap_servo::{ssc32, Fit, Identity, OutputError, PlaybackError, ServoBank};
 
-use crate::config::{ESTOP_AT_TICK, SERVO};
+use crate::config::{ESTOP_AT_TICK, POWER, SERVO};
 use crate::{decoder_glue, instructions, ticks, Failure, Out};
 
 use crate::figure::{
@@ -39,6 +40,8 @@ pub use crate::figure::{Rig, FIGURE_ID, MAX_SERVOS};
 pub const PLAYER_WORDS: usize = 128;
 /// The player of servo clips.
 pub type ServoPlayer<'c> = Player<'c, PLAYER_WORDS>;
+/// The power levels' sampler (SPEC.md §6.1): two poses of the rig's servos.
+pub type Levels = LevelSampler<MAX_SERVOS>;
 
 /// Outputs (`MOCAP_SERVO`, build.rs); 1 (and 0 in the streaming mode) is the Maestro.
 const SSC32: u8 = 2;
@@ -173,6 +176,24 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
     ) -> Result<(), Failure> {
         let start = ticks::now();
         decoder_glue::sample_at(player, t_us, angles).map_err(|e| Failure::Decoder("sample", e))?;
+        let targets = self.rig.targets(angles);
+        self.command(&targets, start, text)
+    }
+
+    /// [`clip_tick`](Self::clip_tick) at tick `tick`'s power level (`config::POWER`, SPEC.md
+    /// §6.1): the pose from `levels`, sampled or interpolated.
+    pub fn level_tick(
+        &mut self,
+        levels: &mut Levels,
+        player: &mut ServoPlayer<'_>,
+        tick: u64,
+        angles: &mut [i32; PLAYER_WORDS],
+        text: &mut Out,
+    ) -> Result<(), Failure> {
+        let start = ticks::now();
+        levels.set_level(level_at(POWER, self.rig.tick_us(tick)));
+        decoder_glue::sample_level(levels, player, tick, angles)
+            .map_err(|e| Failure::Decoder("sample", e))?;
         let targets = self.rig.targets(angles);
         self.command(&targets, start, text)
     }
@@ -434,9 +455,15 @@ impl Mode for FlashClip<'_> {
             .kv("ticks", n_ticks)
             .nl();
         let mut angles = [0i32; PLAYER_WORDS];
+        // Power levels (`MOCAP_POWER`) only when a schedule is built in: without one, no
+        // sampler's state and the loop as before.
+        let mut levels = (!POWER.is_empty()).then(|| Levels::new(driver.rig.rate_mhz()));
         for i in 0..n_ticks {
-            let t_us = driver.rig.tick_us(i);
-            match driver.clip_tick(&mut player, t_us, &mut angles, text) {
+            let tick = match &mut levels {
+                Some(levels) => driver.level_tick(levels, &mut player, i, &mut angles, text),
+                None => driver.clip_tick(&mut player, driver.rig.tick_us(i), &mut angles, text),
+            };
+            match tick {
                 Ok(()) => {}
                 // Faults end at rest: park first, then report (the park below is then a no-op).
                 Err(Failure::EStop) => {

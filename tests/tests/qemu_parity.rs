@@ -193,12 +193,58 @@ fn servo_clip_commands_match_host_on_every_core() {
     }
 }
 
+/// Power levels (SPEC.md §6.1): the demo's servo clip played with a schedule that visits
+/// every level, up and down, mid-stretch too, must send `mocap play --power`'s bytes.
+#[test]
+fn servo_clip_power_levels_match_host_on_every_core() {
+    use mocap_encoder::play::{parse_power, Protocol};
+    if !qemu_available() {
+        return;
+    }
+    const SCHEDULE: &str = "0,3@1s,1@2.03s,4@3s,2@5.1s,0@6.05s,4@7s";
+    let (path, bytes) = servo_demo_clip("servo-demo-power");
+    let clip = Clip::parse(&bytes).unwrap();
+    let power = parse_power(SCHEDULE).unwrap();
+    let expected = serial_lines_at(&clip, Protocol::Maestro, &power);
+    // The levels change the bytes: the test would pass on a firmware that ignored them otherwise.
+    assert_ne!(expected, serial_lines(&clip, Protocol::Maestro));
+    for board in &mocap_tests::boards() {
+        let uart = run_firmware(
+            board,
+            &path,
+            &["--servo", "maestro", "--power", SCHEDULE, "--icount"],
+        );
+        let data = data_lines(&uart);
+        assert!(
+            data == expected,
+            "power levels on {board}: lines differ from the host: {}",
+            first_difference(&expected, &data)
+        );
+        eprintln!(
+            "power levels on {board}: {} ticks identical; {}",
+            expected.lines().count(),
+            uart.lines()
+                .filter(|l| l.starts_with("# servo_ticks"))
+                .collect::<String>()
+        );
+    }
+}
+
 /// `mocap play`'s Maestro bytes as hex lines, its SSC-32 text without the `\r`.
 /// On the demo figure, as the firmware holds the clip to it (its default `MOCAP_FIGURE`).
 fn serial_lines(clip: &Clip<'_>, protocol: mocap_encoder::play::Protocol) -> String {
-    use mocap_encoder::play::{servo_clip_stream_on, Policy, Protocol};
+    serial_lines_at(clip, protocol, &[])
+}
+
+/// [`serial_lines`] at the power levels of a schedule.
+fn serial_lines_at(
+    clip: &Clip<'_>,
+    protocol: mocap_encoder::play::Protocol,
+    power: &[(u64, u8)],
+) -> String {
+    use mocap_encoder::play::{servo_clip_stream_at, Policy, Protocol};
     let figure = demo_figure(Policy::ClampIfInside);
-    let stream = servo_clip_stream_on(clip, &figure, protocol, None).unwrap();
+    let stream = servo_clip_stream_at(clip, Some(&figure), protocol, None, power).unwrap();
     stream
         .ticks
         .iter()

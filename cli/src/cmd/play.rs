@@ -34,6 +34,12 @@ pub struct Args {
     /// Servo ticks per second (default: the rig's rate_hz).
     #[arg(long)]
     rate: Option<f64>,
+    /// Power levels (SPEC.md §6.1): `LEVEL[@TIME],…`, e.g. `2` or
+    /// `0,3@2s,0@4.5s`. At level L the clip is sampled every 2^L-th tick
+    /// (0 to 4) and the ticks between interpolated, as the firmware does to
+    /// save power; a change never jumps. Default: level 0, every tick.
+    #[arg(long)]
+    power: Option<String>,
     /// A show (SPEC.md §9): the command script to run it with (one
     /// `<seconds> <command>` per line: list, trigger, play, fade, queue,
     /// loop, hold, resume, stop, end). Without one, the show's first cue
@@ -77,7 +83,18 @@ pub fn run(a: Args) -> super::Result {
         PolicyArg::ClampIfInside => Policy::ClampIfInside,
         PolicyArg::Clamp => Policy::ClampAlways,
     };
+    let power = match &a.power {
+        Some(text) => play::parse_power(text).map_err(|e| format!("--power: {e}"))?,
+        None => Vec::new(),
+    };
     if bytes.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
+        if !power.is_empty() {
+            return Err(format!(
+                "{}: --power plays one clip; a show's players sample every tick",
+                a.clip.display()
+            )
+            .into());
+        }
         let s = play_show(&a, &bytes, protocol, policy)?;
         return send(&a, &s);
     }
@@ -92,13 +109,13 @@ pub fn run(a: Args) -> super::Result {
     let s = match &a.rig {
         Some(rig) if c.rig().is_some() => {
             let figure = Figure::from_rig(&Rig::read_file(rig)?, policy);
-            play::servo_clip_stream_on(&c, &figure, protocol, a.rate)?
+            play::servo_clip_stream_at(&c, Some(&figure), protocol, a.rate, &power)?
         }
         Some(rig) => {
             let rig = Rig::read_file(rig)?;
-            play::servo_stream(&c, &rig, protocol, a.rate)?
+            play::servo_stream_at(&c, &rig, protocol, a.rate, &power)?
         }
-        None => play::servo_clip_stream(&c, protocol, a.rate)?,
+        None => play::servo_clip_stream_at(&c, None, protocol, a.rate, &power)?,
     };
     send(&a, &s)
 }

@@ -1,6 +1,7 @@
 //! `mocap target`: the chips `encode --target` knows (`list`), a clip's
-//! predicted cost on them (`cost`), and the cost model's fit to QEMU
-//! measurements (`fit`, run by `scripts/cost.sh`).
+//! predicted cost on them (`cost`), a servo clip's power levels (`levels`),
+//! and the cost model's fit to QEMU measurements (`fit`, run by
+//! `scripts/cost.sh`).
 
 use std::path::{Path, PathBuf};
 
@@ -33,6 +34,16 @@ enum Command {
         /// first (`pca-spline`: from no group cached to every group cached).
         #[arg(long)]
         capacities: bool,
+    },
+    /// A servo clip's power levels (SPEC.md §6.1; `mocap play --power`,
+    /// the firmware's `--power`): poses sampled per second and the
+    /// difference from level 0 (every tick sampled) at each level.
+    Levels {
+        /// The servo clip (.mcb, `mocap encode --rig`).
+        clip: PathBuf,
+        /// Servo ticks per second (default: the rig's rate_hz).
+        #[arg(long)]
+        rate: Option<f64>,
     },
     /// Fit the cost model to measurements (scripts/cost.sh writes them).
     Fit {
@@ -92,6 +103,23 @@ pub fn run(a: Args) -> super::Result {
                 .collect::<Result<_, _>>()
                 .map_err(|e| format!("{}: {e}", clip.display()))?;
             print!("{}", cost_table(&rows));
+            Ok(())
+        }
+        Command::Levels { clip, rate } => {
+            let bytes = read_clip(&clip)?;
+            let c = super::parse_clip(&clip, &bytes)?;
+            let rows = mocap_encoder::play::level_errors(&c, rate)
+                .map_err(|e| format!("{}: {e}", clip.display()))?;
+            println!(
+                "{:>5} {:>10} {:>12} {:>12} {:>13}",
+                "level", "samples/s", "max deg", "RMS deg", "max pulse µs"
+            );
+            for r in rows {
+                println!(
+                    "{:>5} {:>10.2} {:>12.3} {:>12.3} {:>13.2}",
+                    r.level, r.samples_per_s, r.max_deg, r.rms_deg, r.max_pulse_us
+                );
+            }
             Ok(())
         }
         Command::Fit { measured, write } => fit_command(&measured, write.as_deref()),
