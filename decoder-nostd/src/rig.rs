@@ -72,17 +72,11 @@ impl RigServo {
         let (p0, p1) = (i64::from(self.pulse_lo_qus), i64::from(self.pulse_hi_qus));
         let num = a.wrapping_sub(lo).wrapping_mul(p1.wrapping_sub(p0));
         // Round half away from zero, symmetric for reversed servos.
+        let den = span.wrapping_mul(2);
         let q = if num >= 0 {
-            num.wrapping_mul(2)
-                .wrapping_add(span)
-                .checked_div(span.wrapping_mul(2))
-                .unwrap_or(0)
+            div(num.wrapping_mul(2).wrapping_add(span), den)
         } else {
-            num.wrapping_mul(-2)
-                .wrapping_add(span)
-                .checked_div(span.wrapping_mul(2))
-                .unwrap_or(0)
-                .wrapping_neg()
+            div(num.wrapping_mul(-2).wrapping_add(span), den).wrapping_neg()
         };
         p0.wrapping_add(q).clamp(0, i64::from(u16::MAX)) as u16
     }
@@ -213,6 +207,16 @@ pub fn tick_us(i: u64, rate_mhz: u32) -> u64 {
         .unwrap_or(0)
 }
 
+/// `n / d` (0 for `d = 0`), in 32 bits when both fit: the same quotient
+/// without a 64-bit division (a library call on a Cortex-M) for every rig
+/// whose angle span times pulse span is below 2³¹ (all real ones).
+fn div(n: i64, d: i64) -> i64 {
+    match (u32::try_from(n), u32::try_from(d)) {
+        (Ok(n), Ok(d)) => i64::from(n.checked_div(d).unwrap_or(0)),
+        _ => n.checked_div(d).unwrap_or(0),
+    }
+}
+
 fn read_servo(r: &mut Reader<'_>) -> Option<RigServo> {
     let pulse = |v: u32| u16::try_from(v).ok();
     Some(RigServo {
@@ -325,6 +329,84 @@ mod tests {
         };
         assert_eq!(rev.pulse_qus(45_000), 4000);
         assert_eq!(rev.pulse_qus(i32::MAX), 2000);
+    }
+
+    /// The mapping as SPEC.md §3.5 writes it, all in 64 bits: `pulse_qus`'s
+    /// 32-bit division gives the same pulse for any servo and angle.
+    fn pulse_reference(s: &RigServo, angle: i32) -> u16 {
+        let (lo, hi) = (i64::from(s.angle_lo_mdeg), i64::from(s.angle_hi_mdeg));
+        let a = i64::from(angle).max(lo).min(hi);
+        let span = hi.wrapping_sub(lo).max(1);
+        let (p0, p1) = (i64::from(s.pulse_lo_qus), i64::from(s.pulse_hi_qus));
+        let num = a.wrapping_sub(lo).wrapping_mul(p1.wrapping_sub(p0));
+        let q = if num >= 0 {
+            num.wrapping_mul(2)
+                .wrapping_add(span)
+                .checked_div(span.wrapping_mul(2))
+                .unwrap_or(0)
+        } else {
+            num.wrapping_mul(-2)
+                .wrapping_add(span)
+                .checked_div(span.wrapping_mul(2))
+                .unwrap_or(0)
+                .wrapping_neg()
+        };
+        p0.wrapping_add(q).clamp(0, i64::from(u16::MAX)) as u16
+    }
+
+    #[test]
+    fn pulse_mapping_is_the_64_bit_formula() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let edges = [
+            i32::MIN,
+            -1_000_000,
+            -90_000,
+            -1,
+            0,
+            1,
+            90_000,
+            360_000,
+            i32::MAX,
+        ];
+        for round in 0..200_000u32 {
+            let r = next();
+            let pick = |v: u64, wide: bool| -> i32 {
+                if wide {
+                    v as i32
+                } else {
+                    (v % 400_001) as i32 - 200_000
+                }
+            };
+            let wide = round % 4 == 0;
+            let (a, b) = (pick(r, wide), pick(r >> 32, wide));
+            let r2 = next();
+            let s = RigServo {
+                output: 0,
+                // Hand-built servos too: lo = hi, lo > hi.
+                angle_lo_mdeg: if round % 11 == 0 { a.max(b) } else { a.min(b) },
+                angle_hi_mdeg: if round % 7 == 0 { a.min(b) } else { a.max(b) },
+                pulse_lo_qus: r2 as u16,
+                pulse_hi_qus: (r2 >> 16) as u16,
+                neutral_qus: 6000,
+                max_speed_mdeg_s: 0,
+            };
+            let angle = if round % 3 == 0 {
+                edges[(r2 >> 40) as usize % edges.len()]
+            } else {
+                pick(next(), wide)
+            };
+            assert_eq!(
+                s.pulse_qus(angle),
+                pulse_reference(&s, angle),
+                "{s:?} {angle}"
+            );
+        }
     }
 
     /// SPEC.md §3.5.1's example: two servos, the second all "as before".

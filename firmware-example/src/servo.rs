@@ -116,6 +116,12 @@ pub struct TickStats {
     pub worst_ticks: u32,
     /// The part spent in `ServoOutput::write`.
     pub output_ticks: u64,
+    /// The parts spent sampling the clip (`sample_at` or the power levels' sampler), mapping
+    /// angles to pulses (`Playback::targets`) and limiting them (`Playback::limit`: the clip's
+    /// limits, then the figure's hard limits).
+    pub sample_ticks: u64,
+    pub map_ticks: u64,
+    pub limit_ticks: u64,
 }
 
 /// One playback loop's state: the rig's playback, the output, and what prints a tick's line.
@@ -151,10 +157,12 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
         if estop_pressed(self.stats.ticks) {
             return Err(Failure::EStop);
         }
+        let before_limit = ticks::now();
         self.rig
             .limit(targets)
             .map_err(|e| Failure::ServoCrate("limiter", e))?;
         let before_output = ticks::now();
+        self.stats.limit_ticks += u64::from(ticks::since(before_limit, before_output));
         self.rig.write(&mut self.output)?;
         let end = ticks::now();
         let spent = ticks::since(start, end);
@@ -176,7 +184,7 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
     ) -> Result<(), Failure> {
         let start = ticks::now();
         decoder_glue::sample_at(player, t_us, angles).map_err(|e| Failure::Decoder("sample", e))?;
-        let targets = self.rig.targets(angles);
+        let targets = self.map(angles, start);
         self.command(&targets, start, text)
     }
 
@@ -194,8 +202,18 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
         levels.set_level(level_at(POWER, self.rig.tick_us(tick)));
         decoder_glue::sample_level(levels, player, tick, angles)
             .map_err(|e| Failure::Decoder("sample", e))?;
-        let targets = self.rig.targets(angles);
+        let targets = self.map(angles, start);
         self.command(&targets, start, text)
+    }
+
+    /// The pulses of `angles` (`Playback::targets`), the sampling since `start` and the mapping
+    /// counted apart.
+    fn map(&mut self, angles: &[i32; PLAYER_WORDS], start: u32) -> [u16; MAX_SERVOS] {
+        let sampled = ticks::now();
+        let targets = self.rig.targets(angles);
+        self.stats.sample_ticks += u64::from(ticks::since(start, sampled));
+        self.stats.map_ticks += u64::from(ticks::since(sampled, ticks::now()));
+        targets
     }
 
     /// Returns every servo to neutral at its speed limit (nothing when already there); the
@@ -252,7 +270,9 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
             .nl();
     }
 
-    /// Per-tick figures: `# <key>= per_tick= max_tick= output_per_tick= cpu_x10000_at_48mhz=`.
+    /// Per-tick figures: `# <key>= per_tick= max_tick= output_per_tick= cpu_x10000_at_48mhz=
+    /// sample_per_tick= map_per_tick= limit_per_tick=` (the parts of `per_tick`: the clip's
+    /// pose, its pulses, the limiter and hard limits; the output's is `output_per_tick`).
     pub fn print_stats(&self, key: &str, calibration_ticks: u32, text: &mut Out) {
         let cal = calibration_ticks;
         let n = self.stats.ticks;
@@ -272,6 +292,18 @@ impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Driver<O, S> {
             .kv(
                 "cpu_x10000_at_48mhz",
                 per_tick * u64::from(self.rig.rate_mhz()) / 1000 * 10_000 / 48_000_000,
+            )
+            .kv(
+                "sample_per_tick",
+                instructions(self.stats.sample_ticks, cal) / n.max(1),
+            )
+            .kv(
+                "map_per_tick",
+                instructions(self.stats.map_ticks, cal) / n.max(1),
+            )
+            .kv(
+                "limit_per_tick",
+                instructions(self.stats.limit_ticks, cal) / n.max(1),
             )
             .nl();
     }

@@ -331,22 +331,8 @@ impl HardStep {
             // against both range ends, so the servo never has to stop harder
             // than `a`, even when the target jumps behind it.
             let a = u32::from(self.max_accel_qus);
-            // From `free` on, braking allows at least the speed limit, which
-            // bounds every speed below: the bound changes nothing, and the
-            // square root is skipped (most ticks, away from the range ends).
-            let free = match self.max_step_qus {
-                0 => u32::MAX,
-                m => stopping_distance(a, u32::from(m)),
-            };
-            let brake = |dist: u32| -> i64 {
-                if dist >= free {
-                    i64::from(self.max_step_qus)
-                } else {
-                    i64::from(brake_speed(a, dist))
-                }
-            };
             let a64 = i64::from(a);
-            let speed = i64::from(speed).min(brake(dist));
+            let speed = brake_cap(a, i64::from(speed), dist);
             let want = if d < 0 {
                 0i64.saturating_sub(speed)
             } else {
@@ -361,8 +347,9 @@ impl HardStep {
             // `pos` is inside the range here.
             let below = u32::from(pos.saturating_sub(self.min_qus));
             let above = u32::from(self.max_qus.saturating_sub(pos));
-            lo = lo.max(0i64.saturating_sub(brake(below)));
-            hi = hi.min(brake(above));
+            // lo.max(−brake(below)) and hi.min(brake(above)).
+            lo = 0i64.saturating_sub(brake_cap(a, 0i64.saturating_sub(lo), below));
+            hi = brake_cap(a, hi, above);
             let v = if lo <= hi { want.max(lo).min(hi) } else { 0 };
             i32::try_from(v).unwrap_or(0)
         };
@@ -374,6 +361,22 @@ impl HardStep {
         // The velocity actually moved (a range end stops it).
         let moved = i32::from(next).wrapping_sub(i32::from(pos));
         (next, moved)
+    }
+}
+
+/// `s.min(brake_speed(a, dist))`, the square root only when braking binds:
+/// `brake_speed(a, dist) >= s` exactly when `stopping_distance(a, s) <= dist`
+/// (`brake_speed` grows with `dist`, and [`stopping_distance`] is the least
+/// `dist` reaching `s`), which takes one division instead of a square root
+/// and a search — most ticks of a servo tracking its target.
+fn brake_cap(a: u32, s: i64, dist: u32) -> i64 {
+    if s <= 0 {
+        // brake_speed is never negative.
+        return s;
+    }
+    match u32::try_from(s) {
+        Ok(v) if stopping_distance(a, v) <= dist => s,
+        _ => s.min(i64::from(brake_speed(a, dist))),
     }
 }
 
@@ -415,6 +418,9 @@ fn brake_speed(a: u32, dist: u32) -> u32 {
     }
 }
 
+/// Speeds up to this have `v² < 2³¹` ([`stopping_distance`] in 32 bits).
+const SMALL_SPEED: u32 = 46_340;
+
 /// The distance a servo at speed `v` needs to stop braking by `a > 0` per
 /// tick: `v + (v − a) + (v − 2a) + …` while positive — the least `dist` with
 /// [`brake_speed`]`(a, dist) >= v`.
@@ -423,7 +429,16 @@ fn stopping_distance(a: u32, v: u32) -> u32 {
         return 0;
     }
     // k further ticks after the first: k·a < v.
-    let k = u64::from(v.saturating_sub(1).checked_div(a).unwrap_or(0));
+    let k32 = v.saturating_sub(1).checked_div(a).unwrap_or(0);
+    if v <= SMALL_SPEED {
+        // (k + 1)·v <= v² and a·k·(k + 1) <= (v − 1)·(k + 1) < v² < 2³¹: 32 bits hold every
+        // term, the same sum without 64-bit products (calls on a Cortex-M0).
+        let k1 = k32.wrapping_add(1);
+        return k1
+            .wrapping_mul(v)
+            .wrapping_sub(a.wrapping_mul(k32).wrapping_mul(k1) / 2);
+    }
+    let k = u64::from(k32);
     let (a64, v64) = (u64::from(a), u64::from(v));
     let sum = k
         .saturating_add(1)
@@ -603,6 +618,56 @@ mod tests {
             assert!(brake_speed(a, free) >= v, "a={a} v={v} free={free}");
             assert!(brake_speed(a, free - 1) < v, "a={a} v={v} free={free}");
         }
+    }
+
+    /// `brake_cap` is `s.min(brake_speed(a, dist))` for every sign and size of `s`, and
+    /// `stopping_distance`'s 32-bit sums are its 64-bit ones.
+    #[test]
+    fn brake_cap_is_the_minimum_with_brake_speed() {
+        let stopping_64 = |a: u64, v: u64| -> u64 {
+            let k = (v - 1) / a;
+            (k + 1) * v - a * k * (k + 1) / 2
+        };
+        for a in 1..=40u32 {
+            for v in 1..=400u32 {
+                assert_eq!(
+                    u64::from(stopping_distance(a, v)),
+                    stopping_64(u64::from(a), u64::from(v)),
+                    "a={a} v={v}"
+                );
+            }
+        }
+        let mut rng = TestRng::new(12);
+        for _ in 0..200_000 {
+            let a = u32::from(rng.next_u16() % 2000).max(1);
+            let v = u32::from(rng.next_u16()).max(1);
+            if v <= SMALL_SPEED {
+                assert_eq!(
+                    u64::from(stopping_distance(a, v)),
+                    stopping_64(u64::from(a), u64::from(v)),
+                    "a={a} v={v}"
+                );
+            }
+            let dist = u32::from(rng.next_u16());
+            let s = i64::from(rng.next_u16()) - 2000;
+            assert_eq!(
+                brake_cap(a, s, dist),
+                s.min(i64::from(brake_speed(a, dist))),
+                "a={a} s={s} dist={dist}"
+            );
+        }
+        for a in 1..=12u32 {
+            for dist in 0..=300u32 {
+                for s in -3..=300i64 {
+                    assert_eq!(
+                        brake_cap(a, s, dist),
+                        s.min(i64::from(brake_speed(a, dist))),
+                        "a={a} s={s} dist={dist}"
+                    );
+                }
+            }
+        }
+        assert_eq!(brake_cap(3, i64::MAX, 10), i64::from(brake_speed(3, 10)));
     }
 
     #[test]
