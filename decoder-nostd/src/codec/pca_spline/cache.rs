@@ -276,6 +276,23 @@ impl<'a> PcaSplineCodec<'a> {
         if cached == self.group_count {
             return Some(());
         }
+        self.uncached_groups(seg, cached, rest, &mut pose)
+    }
+
+    /// The groups without a cache slot (from group `cached` on; their
+    /// records from offset `rest` of the segment's body), decoded from the
+    /// record on every pose through a slot on the stack. Out of line: that
+    /// slot (`GROUP_HEAD + INTERVAL + 4·K_MAX` words) is on the stack only
+    /// while a player too small to cache every group needs it, not under
+    /// every `next_frame`.
+    #[inline(never)]
+    fn uncached_groups(
+        &self,
+        seg: &Segment<'a>,
+        cached: u32,
+        rest: usize,
+        pose: &mut Pose<'a, '_>,
+    ) -> Option<()> {
         // Groups without a cache slot: parse the record on every pose.
         let mut g = Reader::new(self.groups);
         for _ in 0..cached {
@@ -310,7 +327,7 @@ impl<'a> PcaSplineCodec<'a> {
                     *iv = Cached::EMPTY;
                 }
             }
-            self.slot_group(hd[2], &mut slot, &mut pose);
+            self.slot_group(hd[2], &mut slot, pose);
         }
         Some(())
     }
