@@ -54,7 +54,8 @@ pub enum Embedded {
 /// [`CLIP`] parsed, its header logged.
 #[inline(always)]
 pub fn parse_clip() -> Result<Embedded, Stop> {
-    if CLIP.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
+    // `config::SHOW` (build time) says the same: the other branch is left out of the build.
+    if config::SHOW && CLIP.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
         let parsed = Show::parse(CLIP).and_then(|show| Ok((show, show.clip(0)?)));
         let (show, first) = parsed.map_err(|e| {
             error!("show: {}", e);
@@ -178,8 +179,12 @@ pub fn play<O: ServoOutput>(
         error!("servo output: {}", e);
         Stop
     })?;
-    if let Some(show) = show {
-        show::run(show, &mut rig, &mut output, clock, &mut io)
+    // The build links one of the two: the show mode for a show, the clip playback for a clip.
+    if config::SHOW {
+        match show {
+            Some(show) => show::run(show, &mut rig, &mut output, clock, &mut io),
+            None => Err(Stop),
+        }
     } else if servo_clip {
         servo_ticks(clip, &mut rig, &mut output, clock, &mut io.estop)
     } else {
