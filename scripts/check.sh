@@ -9,7 +9,8 @@
 #                 (frames, sample, servo, stream), through scripts/toolchain.sh's route
 #   hw-clippy-B   the same for a real board's crate (scripts/boards.sh MOCAP_HW_BOARD_TABLE,
 #                 firmware-example/pico/), in each output mode (pca9685, pwm)
-#   hw-build-B    scripts/firmware.sh build --board B: the real board's ELF and its UF2
+#   hw-build-B    scripts/firmware.sh build --board B: the real board's ELF and its UF2 (or .bin),
+#                 with the default clip and with the shipped show (its show mode)
 #   uf2           the tests of scripts/uf2.rs (rustc --test)
 #   nostd-...     mocap-decoder on thumbv6m-none-eabi with no default features, then each codec
 #                 feature alone, entropy, and defmt; mocap-servo with no default features and pca9685
@@ -138,7 +139,10 @@ hw_clippy() {
 }
 
 hw_build() {
+    echo "== the default clip"
     bash scripts/firmware.sh build --board "$1"
+    echo "== the show (firmware-example/clips/demo_show.mcb): the show mode"
+    bash scripts/firmware.sh build --board "$1" --clip firmware-example/clips/demo_show.mcb
 }
 
 uf2_tests() {

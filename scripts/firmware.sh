@@ -56,7 +56,7 @@
 #       probe: pico a UF2 (scripts/uf2.rs), blackpill a flat .bin for USB DFU (llvm-objcopy).
 #       Prints the size lines of `size`, then uf2=PATH and uf2_bytes=N (bin=, bin_bytes=), and
 #       last the ELF's path. --servo picks the output (MOCAP_SERVO: pca9685 on I²C, the default,
-#       or pwm). `size` prints the same without the ELF's path; `run` is refused (no emulator:
+#       or pwm). A show as --clip builds the board's show mode (commands over its UART). `size` prints the same without the ELF's path; `run` is refused (no emulator:
 #       flash it with probe-rs, the UF2 or DFU, firmware-example/pico/README.md).
 #   scripts/firmware.sh boards
 #       Lists the boards (the table in scripts/boards.sh): name, core, Rust target, emulator, its machine arguments,

@@ -2,7 +2,8 @@
 //! and `../build_common.rs` as modules): the board's memory map and link arguments, then the
 //! clip and the figure exactly as the QEMU firmware stages them (`build_common`), and the servo
 //! output (`$MOCAP_SERVO`: `pca9685`, the default, or `pwm`) as `OUT_DIR/config.rs`
-//! (`const OUTPUT_PWM: bool`).
+//! (`const OUTPUT_PWM: bool`), with whether the clip is a show (`const SHOW: bool`: a show build
+//! links the show mode and not the clip playback, a clip build the other way round).
 
 use std::env;
 use std::path::PathBuf;
@@ -51,9 +52,14 @@ pub fn build(name: &str, target: &str, link_args: &[&str]) {
         )),
         Err(e) => fail(&format!("{name}: MOCAP_SERVO: {e}")),
     };
+    // SPEC.md §2/§9: the container's version byte (offset 4) is 2 in a show.
+    let clip = std::fs::read(out_dir.join("clip.mcb")).unwrap_or_default();
+    let show = clip.get(4) == Some(&2);
     let config = format!(
         "/// The servo output (`MOCAP_SERVO`): the MCU's PWM channels, else a PCA9685 on I²C.\n\
-         pub const OUTPUT_PWM: bool = {pwm};\n"
+         pub const OUTPUT_PWM: bool = {pwm};\n\
+         /// The embedded `.mcb` is a show (SPEC.md §9): the show mode is built, not the clip playback.\n\
+         pub const SHOW: bool = {show};\n"
     );
     write_if_changed(&out_dir.join("config.rs"), config.as_bytes());
 }

@@ -1,20 +1,26 @@
 //! Playback on a real board, shared by the board firmwares (`pico/src/main.rs`, included there
-//! with `#[path]`): the board sets up its clocks, its timer (a [`Clock`]) and its servo output,
-//! then calls [`play`]. The figure is `../src/figure.rs`, the QEMU firmware's own.
+//! with `#[path]`): the board sets up its clocks, its timer (a [`Clock`]), its UART (a receive
+//! interrupt that hands bytes to `show::received`, and a way to send), its e-stop input and its
+//! servo output, then calls [`play`]. The figure is `../src/figure.rs`, the QEMU firmware's own.
 //!
 //! - A servo clip is held to the figure (the policy, then its hard limits) and played through
 //!   `mocap_servo::Playback` at the rig's tick rate, then parked at the figure's limits.
+//! - A show (`mocap show build`, SPEC.md §9) runs its show mode (`hw/show.rs`, with the QEMU
+//!   firmware's own loop `../src/show_core.rs`): commands over the UART, every tick through the
+//!   same figure and output.
 //! - Any other clip plays its frames at its frame rate, one logged a second, with the servos
 //!   at the figure's neutral.
 //!
-//! Everything is logged with defmt.
+//! The e-stop (pressed: `estop()` true) parks every servo at its speed and acceleration limits
+//! and ends the run, in a servo clip and in a show. Everything is logged with defmt.
 
 use defmt::{error, info, warn};
-use mocap_decoder::{Clip, Player};
+use mocap_decoder::{Clip, Player, Show};
 use mocap_servo::output::ServoOutput;
 use mocap_servo::OutputError;
 
 use crate::figure::{self, Refusal, Rig};
+use crate::show;
 
 /// Words of the servo player's state, as in the QEMU firmware (`servo::PLAYER_WORDS`): one per
 /// servo and `pca-spline`'s key-interval cache.
@@ -37,9 +43,27 @@ pub const PCA9685_ADDRESS: u8 = 0x40;
 /// Why the run stopped early (each is logged where it happens).
 pub struct Stop;
 
+/// What [`CLIP`] holds.
+pub enum Embedded {
+    /// A clip.
+    Clip(Clip<'static>),
+    /// A show, and its first clip (whose rig table every clip of the show shares).
+    Show(Show<'static>, Clip<'static>),
+}
+
 /// [`CLIP`] parsed, its header logged.
 #[inline(always)]
-pub fn parse_clip() -> Result<Clip<'static>, Stop> {
+pub fn parse_clip() -> Result<Embedded, Stop> {
+    // `config::SHOW` (build time) says the same: the other branch is left out of the build.
+    if config::SHOW && CLIP.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
+        let parsed = Show::parse(CLIP).and_then(|show| Ok((show, show.clip(0)?)));
+        let (show, first) = parsed.map_err(|e| {
+            error!("show: {}", e);
+            Stop
+        })?;
+        info!("show: {=u16} clips", show.clip_count());
+        return Ok(Embedded::Show(show, first));
+    }
     let clip = Clip::parse(CLIP).map_err(|e| {
         error!("clip: {}", e);
         Stop
@@ -51,7 +75,7 @@ pub fn parse_clip() -> Result<Clip<'static>, Stop> {
         header.channel_count(),
         header.duration_us() / 1000
     );
-    Ok(clip)
+    Ok(Embedded::Clip(clip))
 }
 
 /// After the run: sleeps for good when it played (the servos hold their rest pulses), else
@@ -89,14 +113,26 @@ pub fn blink(clock: &impl Clock, mut light: impl FnMut(bool)) -> ! {
     }
 }
 
-/// Builds the output for the servos of the rig that plays `clip` (`make(outputs)`), then plays:
-/// a servo clip on its rig held to the figure, any other clip's frames with the servos at the
-/// figure's neutral.
+/// The board's inputs and outputs besides the servos: the e-stop input (`estop()`: pressed) and
+/// the UART's transmit side (`send(bytes)`, blocking; its receive side feeds `show::received`).
+pub struct Io<E, S> {
+    pub estop: E,
+    pub send: S,
+}
+
+/// Builds the output for the servos of the rig that plays `embedded` (`make(outputs)`), then
+/// plays: a servo clip on its rig held to the figure, a show on its clips' rig held to the
+/// figure, any other clip's frames with the servos at the figure's neutral.
 pub fn play<O: ServoOutput>(
-    clip: &Clip<'static>,
+    embedded: &Embedded,
     clock: &impl Clock,
+    mut io: Io<impl FnMut() -> bool, impl FnMut(&[u8])>,
     make: impl FnOnce(&[u16]) -> Result<O, mocap_servo::Error>,
 ) -> Result<(), Stop> {
+    let (clip, show) = match embedded {
+        Embedded::Clip(clip) => (clip, None),
+        Embedded::Show(show, first) => (first, Some(*show)),
+    };
     let (mut rig, servo_clip) = match figure::candidate(clip) {
         Ok(candidate) => {
             info!(
@@ -115,6 +151,12 @@ pub fn play<O: ServoOutput>(
                     return Err(Stop);
                 }
             }
+        }
+        Err(Refusal::NoRigTable) if show.is_some() => {
+            error!(
+                "the show has no rig table (made without a rig): this firmware plays servo shows"
+            );
+            return Err(Stop);
         }
         Err(Refusal::NoRigTable) => {
             warn!("the clip has no rig table (made without `mocap encode --rig`): its frames play, the servos stay at the figure's neutral");
@@ -137,8 +179,14 @@ pub fn play<O: ServoOutput>(
         error!("servo output: {}", e);
         Stop
     })?;
-    if servo_clip {
-        servo_ticks(clip, &mut rig, &mut output, clock)
+    // The build links one of the two: the show mode for a show, the clip playback for a clip.
+    if config::SHOW {
+        match show {
+            Some(show) => show::run(show, &mut rig, &mut output, clock, &mut io),
+            None => Err(Stop),
+        }
+    } else if servo_clip {
+        servo_ticks(clip, &mut rig, &mut output, clock, &mut io.estop)
     } else {
         // The rig starts at neutral: one write puts every servo there.
         rig.write(&mut output).map_err(output_failed)?;
@@ -147,7 +195,7 @@ pub fn play<O: ServoOutput>(
 }
 
 /// Logs a failed output write.
-fn output_failed<E>(e: OutputError<E>) -> Stop {
+pub fn output_failed<E>(e: OutputError<E>) -> Stop {
     match e {
         OutputError::Invalid(e) => error!("servo output: {}", e),
         _ => error!("servo output device failed (PCA9685: I2C error, check the wiring)"),
@@ -165,7 +213,7 @@ pub struct Pace<'t, C: Clock> {
     clock: &'t C,
     start_us: u64,
     /// Deadlines already past when waited for (a tick that overran its period).
-    late: u32,
+    pub late: u32,
 }
 
 impl<'t, C: Clock> Pace<'t, C> {
@@ -177,7 +225,7 @@ impl<'t, C: Clock> Pace<'t, C> {
         }
     }
 
-    fn now_us(&self) -> u64 {
+    pub fn now_us(&self) -> u64 {
         self.clock.now_us()
     }
 
@@ -193,21 +241,21 @@ impl<'t, C: Clock> Pace<'t, C> {
 
 /// Time of each tick's work (decode, limits, output), µs.
 #[derive(Default)]
-struct Busy {
+pub struct Busy {
     count: u64,
     total_us: u64,
     max_us: u64,
 }
 
 impl Busy {
-    fn add(&mut self, us: u64) {
+    pub fn add(&mut self, us: u64) {
         self.count = self.count.saturating_add(1);
         self.total_us = self.total_us.saturating_add(us);
         self.max_us = self.max_us.max(us);
     }
 
     /// `what`: count, mean and worst µs, and the share of a `period_us` period (1/100 %).
-    fn log(&self, what: &str, period_us: u64, late: u32) {
+    pub fn log(&self, what: &str, period_us: u64, late: u32) {
         let mean = self.total_us.checked_div(self.count).unwrap_or(0);
         info!(
             "{=str}: {=u64}, {=u64} us each on average, worst {=u64} us, {=u64}/10000 of the period; {=u32} late",
@@ -227,6 +275,7 @@ fn servo_ticks<O: ServoOutput>(
     rig: &mut Rig,
     output: &mut O,
     clock: &impl Clock,
+    estop: &mut impl FnMut() -> bool,
 ) -> Result<(), Stop> {
     let mut player = Player::<PLAYER_WORDS>::new(clip).map_err(|e| {
         error!("player: {}", e);
@@ -246,9 +295,15 @@ fn servo_ticks<O: ServoOutput>(
     let mut busy = Busy::default();
     let mut pace = Pace::start(clock);
     let mut result = Ok(());
+    let mut last = n_ticks;
     for i in 0..n_ticks {
         let t_us = rig.tick_us(i);
         pace.wait_until(t_us);
+        if estop() {
+            warn!("e-stop at {=u64} ms: every servo to rest", t_us / 1000);
+            last = i;
+            break;
+        }
         let t0 = pace.now_us();
         if let Err(e) = player.sample_at(t_us, &mut angles) {
             // Faults end at rest: park below, then stop.
@@ -263,16 +318,33 @@ fn servo_ticks<O: ServoOutput>(
             info!("t={=u64} ms pulses_qus={}", t_us / 1000, rig.held());
         }
     }
-    // Back to neutral, one tick per period after the last.
-    let mut k = n_ticks;
+    park(rig, output, &mut pace, last)?;
+    busy.log("ticks", period_us, pace.late);
+    log_hard_clamps(rig);
+    result
+}
+
+/// Back to neutral at the speed and acceleration limits, one tick per period after tick `last`.
+pub fn park<O: ServoOutput, C: Clock>(
+    rig: &mut Rig,
+    output: &mut O,
+    pace: &mut Pace<'_, C>,
+    last: u64,
+) -> Result<(), Stop> {
+    let period_us = rig.tick_us(1);
+    let mut k = last;
     rig.park(output, |_| {
         k = k.saturating_add(1);
-        pace.wait_until(rig_tick_us(period_us, k));
+        pace.wait_until(period_us.saturating_mul(k));
         Ok::<(), OutputError<O::Error>>(())
     })
     .map_err(output_failed)?;
-    busy.log("ticks", period_us, pace.late);
-    info!("at rest after {=u64} park ticks", k.saturating_sub(n_ticks));
+    info!("at rest after {=u64} park ticks", k.saturating_sub(last));
+    Ok(())
+}
+
+/// What the figure's hard limits changed, per servo.
+pub fn log_hard_clamps(rig: &Rig) {
     for ((servo, &ticks), &worst) in rig
         .servos()
         .iter()
@@ -286,12 +358,6 @@ fn servo_ticks<O: ServoOutput>(
             );
         }
     }
-    result
-}
-
-/// Tick `k`'s time at a period of `period_us` (the park's ticks continue the clip's).
-fn rig_tick_us(period_us: u64, k: u64) -> u64 {
-    period_us.saturating_mul(k)
 }
 
 /// Any clip's frames at its frame rate; one logged a second.

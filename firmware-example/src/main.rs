@@ -20,6 +20,7 @@ mod entropy_bench;
 mod figure;
 mod servo;
 mod show;
+mod show_core;
 mod stream;
 mod text;
 

@@ -7,31 +7,26 @@
 //! clock. Output events of the cues (`gpio`, `serial`) print as `# event t_us=… …` lines, the
 //! lines `mocap play` prints for the same show and commands.
 //!
-//! The show clock starts with the first command (show time 0 is its arrival); a command whose
-//! time has passed when it arrives acts at once. The run ends after the tick at an `End`
-//! command's time, or once the show is done (no cue list, nothing queued, the last clip ended)
-//! with no command waiting; then every servo returns to rest.
+//! The loop itself — the command queue, lockstep, the runner's tick, replies — is
+//! `crate::show_core`, shared with the real boards (`hw/show.rs`); this file gives it the UART
+//! link ([`Link`]) and a stage: the [`Driver`], the instruction figures, the printed lines. The
+//! show clock starts with the first command (show time 0 is its arrival); a command whose time
+//! has passed when it arrives acts at once. The run ends after the tick at an `End` command's
+//! time, or once the show is done (no cue list, nothing queued, the last clip ended) with no
+//! command waiting; then every servo returns to rest.
 
-use heapless::Deque;
-use mocap_decoder::show::clock::DEFAULT_SLEW_PPM;
-use mocap_decoder::{Command, Output, Show, ShowClock, ShowRunner, State};
+use mocap_decoder::{Output, Show, State};
 use mocap_servo::output::ServoOutput;
-use mocap_servo::stream::{show_request, Message, ShowRequest};
+use mocap_servo::stream::Message;
 
 use crate::board::Rx;
 use crate::servo::{hex, Driver, Fault, Mode, TickStats, MAX_SERVOS, PLAYER_WORDS};
-use crate::stream::{Event, Link};
+use crate::show_core::{self, Ended, Fail, Frames, Stage, QUEUE};
+use crate::stream::Link;
 use crate::{instructions, ticks, Failure, Out};
 
-/// The show runner: two clip players of [`PLAYER_WORDS`] words, poses of [`MAX_SERVOS`].
-pub type Runner = ShowRunner<'static, PLAYER_WORDS, MAX_SERVOS>;
-/// Commands waiting for their time.
-pub const QUEUE: usize = 32;
-/// Output events of one tick kept for printing.
-const EVENTS: usize = 8;
-
-/// A request at a show time, µs.
-type Pending = (u64, ShowRequest);
+/// The show runner: two clip players of [`PLAYER_WORDS`] words.
+pub type Runner = show_core::Runner<PLAYER_WORDS>;
 
 /// The show in flash.
 pub struct ShowMode {
@@ -39,80 +34,75 @@ pub struct ShowMode {
     pub calibration_ticks: u32,
 }
 
-/// What came over the link: the commands waiting for their time, and how far the sender has
-/// vouched for the show (lockstep).
-struct Inbox {
-    queue: Deque<Pending, QUEUE>,
-    /// After a first `Sync`: every command up to this show time (µs) has arrived; the show
-    /// clock waits here. `None`: free-running (commands act when they arrive).
-    horizon: Option<u64>,
-    /// A first `Show` frame arrived: the show clock runs.
-    started: bool,
-    rejected: u32,
+/// The UART link's frames, as the show loop takes them.
+impl Frames for Link {
+    fn poll_with<T>(&mut self, f: impl FnOnce(&Message<'_>) -> T) -> Option<T> {
+        self.poll_map(f)
+    }
+
+    fn wait_with<T>(&mut self, f: impl FnOnce(&Message<'_>) -> T) -> Option<T> {
+        self.wait_map(f)
+    }
 }
 
-impl Inbox {
-    fn new() -> Self {
-        Inbox {
-            queue: Deque::new(),
-            horizon: None,
-            started: false,
-            rejected: 0,
-        }
+/// The show loop's stage here: the [`Driver`] (limits, hard limits, the recorded output and its
+/// line), the instruction figures in and outside blends, `# event` lines and replies printed.
+struct Qemu<'d, 't, O, S> {
+    driver: &'d mut Driver<O, S>,
+    text: &'t mut Out,
+    /// SysTick at the start of the tick's work.
+    start: u32,
+    blend: TickStats,
+    plain: TickStats,
+}
+
+impl<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>> Stage for Qemu<'_, '_, O, S> {
+    type Error = Failure;
+
+    fn tick_us(&self, i: u64) -> u64 {
+        self.driver.rig.tick_us(i)
     }
 
-    /// One frame: a command into the queue, a `Sync` moves the horizon (an `End` makes it
-    /// endless), a timecode into the clock.
-    fn accept(&mut self, event: Event, clock: &mut ShowClock, local_us: u64) {
-        match event {
-            Event::Show { at_ms, op, arg, ms } => {
-                self.started = true;
-                let at = u64::from(at_ms) * 1000;
-                match show_request(op, arg, ms) {
-                    Some(ShowRequest::Sync) => {
-                        let h = if at_ms == u32::MAX { u64::MAX } else { at };
-                        self.horizon = Some(self.horizon.unwrap_or(0).max(h));
-                    }
-                    Some(r) if self.queue.push_back((at, r)).is_ok() => {
-                        if r == ShowRequest::End {
-                            self.horizon = self.horizon.map(|_| u64::MAX);
-                        }
-                    }
-                    _ => self.rejected += 1,
-                }
+    /// QEMU runs as fast as it can: the tick's time is virtual.
+    fn pace(&mut self, _local_us: u64) {}
+
+    fn start(&mut self) {
+        self.start = ticks::now();
+    }
+
+    fn pose(&mut self, angles: &[i32], state: State) -> Result<bool, Failure> {
+        let targets = self.driver.rig.targets(angles);
+        let before = self.driver.stats.total_ticks;
+        match self.driver.command(&targets, self.start, self.text) {
+            Ok(()) => {}
+            Err(Failure::EStop) => {
+                self.driver.park_after(Fault::EStop, self.text)?;
+                return Ok(false);
             }
-            Event::Timecode { show_ms } => clock.timecode(local_us, u64::from(show_ms) * 1000),
-            // A session's greeting: nothing to do.
-            Event::Hello => {}
-            // A host that stops (`mocap send`, Ctrl-C): stop now and end, at rest.
-            Event::Stop => {
-                let now = clock.now(local_us);
-                self.horizon = self.horizon.map(|_| u64::MAX);
-                if self
-                    .queue
-                    .push_back((now, ShowRequest::Run(Command::Stop)))
-                    .is_err()
-                    || self.queue.push_back((now, ShowRequest::End)).is_err()
-                {
-                    self.rejected += 1;
-                }
-            }
-            _ => self.rejected += 1,
+            Err(e) => return Err(e),
         }
+        let spent = self.driver.stats.total_ticks - before;
+        let stats = if state == State::Blending {
+            &mut self.blend
+        } else {
+            &mut self.plain
+        };
+        stats.ticks += 1;
+        stats.total_ticks += spent;
+        stats.worst_ticks = stats.worst_ticks.max(spent as u32);
+        Ok(true)
     }
 
-    /// Takes the frames that have arrived, while the queue has room (the rest wait in the link
-    /// and the UART).
-    fn take(&mut self, link: &mut Link, clock: &mut ShowClock, local_us: u64) {
-        while !self.queue.is_full() {
-            let Some(event) = link.poll() else { return };
-            self.accept(event, clock, local_us);
-        }
+    fn event(&mut self, at_us: u64, output: &Output<'_>) {
+        print_event(at_us, output, self.text);
     }
 
-    /// Whether the show clock must wait for the sender before show time `t`.
-    fn behind(&self, t: u64) -> bool {
-        self.horizon.is_some_and(|h| h < t) && !self.queue.is_full()
+    fn send(&mut self, message: &Message<'_>) -> Result<(), Failure> {
+        crate::stream::send(self.text, message)
+    }
+
+    fn timed_out(&mut self) -> Result<(), Failure> {
+        self.driver.park_after(Fault::StreamTimeout, self.text)
     }
 }
 
@@ -136,110 +126,26 @@ impl Mode for ShowMode {
             )
             .nl();
         let mut link = Link::new(Rx::take());
-        let mut inbox = Inbox::new();
-        let mut clock = ShowClock::new(DEFAULT_SLEW_PPM);
-        // The show starts with the first `Show` frame.
-        while !inbox.started {
-            match link.wait() {
-                Some(event) => inbox.accept(event, &mut clock, 0),
-                None => {
-                    driver.park_after(Fault::StreamTimeout, text)?;
-                    return Ok(());
-                }
-            }
-        }
-        let mut angles = [0i32; PLAYER_WORDS];
-        let mut end: Option<u64> = None;
-        let mut blend = TickStats::default();
-        let mut plain = TickStats::default();
-        let mut events: heapless::Vec<(u64, Output<'static>), EVENTS> = heapless::Vec::new();
-        let mut dropped_events = 0u32;
-        let mut i = 0u64;
-        // The last tick's show time: a command that arrives late acts now, not in the past.
-        let mut last_t = 0u64;
-        loop {
-            let local = driver.rig.tick_us(i);
-            inbox.take(&mut link, &mut clock, local);
-            let t = clock.now(local);
-            // Lockstep: wait until the sender has vouched for this tick's time.
-            while inbox.behind(t) {
-                match link.wait() {
-                    Some(event) => inbox.accept(event, &mut clock, local),
-                    None => {
-                        driver.park_after(Fault::StreamTimeout, text)?;
-                        return Ok(());
-                    }
-                }
-            }
-            if end.is_some_and(|e| t > e) {
-                break;
-            }
-            let start = ticks::now();
-            let mut emit = |at: u64, o: Output<'static>| {
-                if events.push((at, o)).is_err() {
-                    dropped_events += 1;
-                }
-            };
-            let mut status = None;
-            while let Some(&(at, request)) = inbox.queue.front().filter(|(at, _)| *at <= t) {
-                inbox.queue.pop_front();
-                match request {
-                    ShowRequest::Run(c) => match runner.command(c, at.max(last_t), &mut emit) {
-                        Ok(()) => {}
-                        // A clip or list the show does not have: nothing changes.
-                        Err(_) => inbox.rejected += 1,
-                    },
-                    ShowRequest::End => end = Some(at),
-                    ShowRequest::Status => status = Some(at.max(last_t)),
-                    ShowRequest::Sync => {}
-                }
-            }
-            let now = runner
-                .tick(t, &mut angles, &mut emit)
-                .map_err(|e| Failure::Decoder("show", e))?;
-            let targets = driver.rig.targets(&angles);
-            let before = driver.stats.total_ticks;
-            match driver.command(&targets, start, text) {
-                Ok(()) => {}
-                Err(Failure::EStop) => {
-                    driver.park_after(Fault::EStop, text)?;
-                    break;
-                }
-                Err(e) => return Err(e),
-            }
-            let spent = driver.stats.total_ticks - before;
-            let stats = if now.state == State::Blending {
-                &mut blend
-            } else {
-                &mut plain
-            };
-            stats.ticks += 1;
-            stats.total_ticks += spent;
-            stats.worst_ticks = stats.worst_ticks.max(spent as u32);
-            for (at, o) in events.iter() {
-                print_event(*at, o, text);
-            }
-            events.clear();
-            if let Some(at) = status {
-                let (state, clip) = (now.state, now.clip);
-                let message = Message::ShowStatus {
-                    show_ms: u32::try_from(at / 1000).unwrap_or(u32::MAX),
-                    clip: clip.unwrap_or(u16::MAX),
-                    state: state_code(state),
-                    list: runner.running().map_or(u16::MAX, |(l, _)| l),
-                };
-                crate::stream::send(text, &message)?;
-            }
-            last_t = t;
-            i += 1;
-            if end.is_none()
-                && inbox.queue.is_empty()
-                && inbox.horizon.is_none_or(|h| h == u64::MAX)
-                && runner.is_done()
-            {
-                break;
-            }
-        }
+        let mut stage = Qemu {
+            driver,
+            text,
+            start: 0,
+            blend: TickStats::default(),
+            plain: TickStats::default(),
+        };
+        let summary = match show_core::run(&mut runner, &mut link, &mut stage) {
+            Ok(Ended::Ran(summary)) => summary,
+            Ok(Ended::TimedOut) => return Ok(()),
+            Err(Fail::Show(e)) => return Err(Failure::Decoder("show", e)),
+            Err(Fail::Stage(e)) => return Err(e),
+        };
+        let Qemu {
+            driver,
+            text,
+            blend,
+            plain,
+            ..
+        } = stage;
         driver.park(text)?;
         driver.print_hard_clamps(text);
         driver.print_stats("show_ticks", self.calibration_ticks, text);
@@ -254,29 +160,16 @@ impl Mode for ShowMode {
                 .kv("max_tick", instructions(u64::from(s.worst_ticks), cal))
                 .nl();
         }
-        let (timecodes, relocations) = clock.timecodes();
         text.str("#")
-            .kv("commands_rejected", u64::from(inbox.rejected))
-            .kv("events_dropped", u64::from(dropped_events))
-            .kv("timecodes", u64::from(timecodes))
-            .kv("relocations", u64::from(relocations))
+            .kv("commands_rejected", u64::from(summary.rejected))
+            .kv("events_dropped", u64::from(summary.events_dropped))
+            .kv("timecodes", u64::from(summary.timecodes))
+            .kv("relocations", u64::from(summary.relocations))
             .nl();
         text.str("#")
             .kv("stack_bytes_used", crate::stack::used_bytes() as u64)
             .nl();
         Ok(())
-    }
-}
-
-/// `ShowStatus.state` (SPEC.md §8.2).
-fn state_code(s: State) -> u8 {
-    match s {
-        State::Idle => 0,
-        State::Playing => 1,
-        State::Blending => 2,
-        State::Held => 3,
-        State::Stopped => 4,
-        State::Ended => 5,
     }
 }
 

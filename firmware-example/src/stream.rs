@@ -113,18 +113,8 @@ pub(crate) enum Event {
         pulses: heapless::Vec<u16, MAX_POSE_SERVOS>,
     },
     Stop,
-    /// A show command (the show mode, `crate::show`).
-    Show {
-        at_ms: u32,
-        op: u8,
-        arg: u16,
-        ms: u32,
-    },
-    /// The external show clock's time.
-    Timecode {
-        show_ms: u32,
-    },
-    /// A message the MCU does not take (`Status`, a `Hello` of another version).
+    /// A message the streaming mode does not take (`Status`, a `Hello` of another version, the
+    /// show mode's `Show` and `Timecode`).
     Other,
 }
 
@@ -150,13 +140,6 @@ impl Event {
                 pulses: pulses.clone(),
             },
             Message::Stop => Event::Stop,
-            Message::Show { at_ms, op, arg, ms } => Event::Show {
-                at_ms: *at_ms,
-                op: *op,
-                arg: *arg,
-                ms: *ms,
-            },
-            Message::Timecode { show_ms } => Event::Timecode { show_ms: *show_ms },
             _ => Event::Other,
         }
     }
@@ -221,6 +204,12 @@ impl Link {
 
     /// The next accepted message if its last byte has arrived; never waits.
     pub(crate) fn poll(&mut self) -> Option<Event> {
+        self.poll_map(Event::from_message)
+    }
+
+    /// [`poll`](Self::poll), the message handed to `f` (the show mode reads it in place).
+    pub(crate) fn poll_map<T>(&mut self, f: impl FnOnce(&Message<'_>) -> T) -> Option<T> {
+        let mut f = Some(f);
         loop {
             self.pump();
             let byte = self.ring.pop_front()?;
@@ -241,7 +230,8 @@ impl Link {
                     }
                     continue;
                 }
-                Some(Ok(message)) => Event::from_message(&message),
+                // `f` is called once: the loop returns after it.
+                Some(Ok(message)) => f.take().map(|f| f(&message))?,
                 Some(Err(_)) => {
                     self.end_frame(true);
                     continue;
@@ -275,11 +265,17 @@ impl Link {
     /// without one after the first byte has arrived (never with `STREAM_TIMEOUT_MS` = 0).
     /// Corrupt frames do not count: only an accepted frame is a sign of life.
     pub(crate) fn wait(&mut self) -> Option<Event> {
+        self.wait_map(Event::from_message)
+    }
+
+    /// [`wait`](Self::wait), the message handed to `f`.
+    pub(crate) fn wait_map<T>(&mut self, f: impl FnOnce(&Message<'_>) -> T) -> Option<T> {
         let mut idle = 0u64;
         let mut last = ticks::now();
+        let mut f = Some(f);
         loop {
-            if let Some(event) = self.poll() {
-                return Some(event);
+            if let Some(event) = self.poll_map(|m| f.take().map(|f| f(m))) {
+                return event;
             }
             // One SysTick wrap at most between two reads: a poll is far shorter.
             let now = ticks::now();
@@ -513,10 +509,7 @@ fn play<O: ServoOutput, S: FnMut(&mut Out) -> Result<(), Failure>>(
                         Ok(_) => session.chunks_duplicate += 1,
                         Err(_) => session.chunks_rejected += 1,
                     },
-                    Event::Play { .. }
-                    | Event::Show { .. }
-                    | Event::Timecode { .. }
-                    | Event::Other => session.other_frames += 1,
+                    Event::Play { .. } | Event::Other => session.other_frames += 1,
                 }
             }
         }
@@ -616,7 +609,7 @@ impl Mode for Stream {
                 }
                 Event::Stop => break,
                 // The show mode's frames: no show here.
-                Event::Show { .. } | Event::Timecode { .. } | Event::Other => {
+                Event::Other => {
                     s.other_frames += 1;
                     None
                 }

@@ -3,10 +3,17 @@
 //! logs with defmt over RTT. The playback is the one every real board shares
 //! (`../hw/play.rs`, with the QEMU firmware's `../src/figure.rs`); this file sets up the board.
 //!
+//! A show (`mocap show build`) runs the show mode every board shares (`../hw/show.rs`, with the
+//! QEMU firmware's loop `../src/show_core.rs`): commands as `Show` frames on USART2 (TX PA2,
+//! RX PA3, 115 200 baud 8N1; SPEC.md §8.2, `mocap send show.mcb --cues cues.txt --port …`).
+//! USART2, not USART1: USART1's PA9/PA10 are PWM outputs 1 and 2 (TIM1); PA2/PA3 are free with
+//! either output. The e-stop is PB12 (pulled up; a button to GND parks every servo and ends the
+//! run).
+//!
 //! The output (`MOCAP_SERVO`): a PCA9685 on I²C1 (SCL PB6, SDA PB7, address 0x40, 400 kHz;
 //! default) or 12 PWM servos at 50 Hz: outputs 0–3 on TIM1 (PA8, PA9, PA10, PA11), 4–7 on TIM3
 //! (PA6, PA7, PB0, PB1), 8–11 on TIM4 (PB6, PB7, PB8, PB9). The LED (PC13, active low) is on while
-//! the clip plays and blinks fast after an error. See README.md (in ../pico/) for flashing.
+//! the clip plays and blinks fast after an error. See README.md for flashing.
 #![no_std]
 #![no_main]
 
@@ -16,6 +23,11 @@ mod figure;
 // The playback every real board shares: clip, figure, pacing, logs.
 #[path = "../../hw/play.rs"]
 mod play;
+// The show mode every real board shares, and its loop, the QEMU firmware's own.
+#[path = "../../hw/show.rs"]
+mod show;
+#[path = "../../src/show_core.rs"]
+mod show_core;
 
 use core::cell::Cell;
 use core::convert::Infallible;
@@ -24,16 +36,19 @@ use cortex_m_rt::entry;
 use defmt::{error, info};
 use defmt_rtt as _;
 use embedded_hal::pwm::SetDutyCycle;
+use embedded_io::Write as _;
 use mocap_servo::output::{Pca9685Output, PwmOutput};
 use mocap_servo::pca9685::{Address, Pca9685Servos};
 use mocap_servo::ServoBank;
 use panic_probe as _;
 use stm32f4xx_hal::gpio::{Output, Pin, PushPull};
 use stm32f4xx_hal::i2c::I2c;
+use stm32f4xx_hal::pac::interrupt;
+use stm32f4xx_hal::serial::{self, Serial};
 use stm32f4xx_hal::timer::CounterUs;
 use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 
-use play::{idle, Stop};
+use play::{idle, Io, Stop};
 
 /// The Black Pill's crystal, and the core clock it runs at.
 const HSE_MHZ: u32 = 25;
@@ -99,8 +114,27 @@ fn main() -> ! {
         high: Cell::new(0),
     };
 
-    let Ok(clip) = play::parse_clip() else {
+    let Ok(embedded) = play::parse_clip() else {
         play::blink(&clock, |on| light(&mut led, on));
+    };
+    let estop_pin = gpiob.pb12.into_pull_up_input();
+    let estop = move || estop_pin.is_low();
+    let config = serial::config::Config::default().baudrate(show::BAUD.bps());
+    let Ok(mut uart) = dp
+        .USART2
+        .serial::<u8>((gpioa.pa2, gpioa.pa3), config, &mut rcc)
+    else {
+        error!("USART2 set-up failed");
+        play::blink(&clock, |on| light(&mut led, on));
+    };
+    uart.listen(serial::Event::RxNotEmpty);
+    // SAFETY: the handler (USART2) only drains USART2's receive register into the show's ring,
+    // which it shares through a critical section; unmasking breaks no critical section.
+    unsafe { pac::NVIC::unmask(pac::Interrupt::USART2) };
+    info!("USART2: TX PA2, RX PA3, {=u32} baud", show::BAUD);
+    let io = Io {
+        estop,
+        send: |bytes: &[u8]| send(&mut uart, bytes),
     };
 
     led.set_low(); // on
@@ -140,7 +174,9 @@ fn main() -> ! {
         info!(
             "output: PWM, 12 channels at 50 Hz (TIM1 PA8-PA11, TIM3 PA6 PA7 PB0 PB1, TIM4 PB6-PB9)"
         );
-        play::play(&clip, &clock, |outputs| PwmOutput::new(bank, outputs))
+        play::play(&embedded, &clock, io, |outputs| {
+            PwmOutput::new(bank, outputs)
+        })
     } else {
         let i2c = I2c::new(dp.I2C1, (gpiob.pb6, gpiob.pb7), I2C_KHZ.kHz(), &mut rcc);
         info!(
@@ -148,7 +184,9 @@ fn main() -> ! {
             play::PCA9685_ADDRESS
         );
         match Pca9685Servos::new(i2c, Address::from(play::PCA9685_ADDRESS)) {
-            Ok(device) => play::play(&clip, &clock, |outputs| Pca9685Output::new(device, outputs)),
+            Ok(device) => play::play(&embedded, &clock, io, |outputs| {
+                Pca9685Output::new(device, outputs)
+            }),
             Err(_) => {
                 error!("the PCA9685 did not answer: check SCL PB6, SDA PB7 (with pull-ups), VCC 3V3, GND and its address pins");
                 Err(Stop)
@@ -157,6 +195,24 @@ fn main() -> ! {
     };
     led.set_high(); // off
     play::finish(played, &clock, |on| light(&mut led, on))
+}
+
+/// Writes a reply on USART2 (blocking; a failed write is logged, the show goes on).
+fn send(uart: &mut Serial<pac::USART2>, bytes: &[u8]) {
+    if uart.write_all(bytes).is_err() {
+        error!("USART2: reply not sent");
+    }
+}
+
+/// USART2's receive interrupt: the received byte to the show's ring.
+#[interrupt]
+fn USART2() {
+    // SAFETY: reads only USART2's status and data registers (reading both clears the receive
+    // flag and an overrun); the main code owns the peripheral but only transmits.
+    let usart = unsafe { &*pac::USART2::ptr() };
+    while usart.sr().read().rxne().bit_is_set() {
+        show::received(usart.dr().read().dr().bits() as u8);
+    }
 }
 
 /// The LED (PC13, active low).

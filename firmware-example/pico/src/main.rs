@@ -8,13 +8,19 @@
 //!   `mocap_servo::Playback` at the rig's tick rate: `Player::sample_at` per tick, the rig's
 //!   pulse mapping, the limiter, the hard limits, the output; after the clip every servo
 //!   returns to its neutral at its speed and acceleration limits.
+//! - A show (`mocap show build`, SPEC.md §9) runs the QEMU firmware's show mode (`../hw/show.rs`
+//!   with `../src/show_core.rs`): commands as `Show` frames on UART0 (`mocap send show.mcb
+//!   --cues cues.txt --port …`, SPEC.md §8.2, 115 200 baud 8N1), every tick through the figure.
 //! - Any other clip (the default `clips/demo.mcb` is a skeleton clip) is played frame by frame
 //!   at its own frame rate with `Player::next_frame`, its frames logged once a second; the
 //!   servos are held at the figure's neutral.
 //!
 //! The output (`MOCAP_SERVO`): a PCA9685 on I²C0 (SDA GP16, SCL GP17, address 0x40, 400 kHz;
-//! default) or the RP2040's own PWM on GP0–GP15 (output n on GPn, 50 Hz). The LED (GP25) is on
-//! while the clip plays and blinks fast after an error. See README.md for wiring and flashing.
+//! default) or the RP2040's own PWM on GP0–GP15 (output n on GPn, 50 Hz). UART0 is on GP0 (TX)
+//! and GP1 (RX) with the PCA9685, on GP16 (TX) and GP17 (RX) with PWM (GP0–GP15 are servos
+//! then, and I²C0 is unused). The e-stop is GP22 (pulled up; a button to GND parks every servo
+//! and ends the run). The LED (GP25) is on while the clip plays and blinks fast after an error.
+//! See README.md for wiring and flashing.
 #![no_std]
 #![no_main]
 
@@ -24,12 +30,17 @@ mod figure;
 // The playback every real board shares: clip, figure, pacing, logs.
 #[path = "../../hw/play.rs"]
 mod play;
+// The show mode every real board shares, and its loop, the QEMU firmware's own.
+#[path = "../../hw/show.rs"]
+mod show;
+#[path = "../../src/show_core.rs"]
+mod show_core;
 
 use core::convert::Infallible;
 
 use defmt::{error, info};
 use defmt_rtt as _;
-use embedded_hal::digital::OutputPin;
+use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
 use mocap_servo::output::{Pca9685Output, PwmOutput};
 use mocap_servo::pca9685::{Address, Pca9685Servos};
@@ -38,11 +49,14 @@ use panic_probe as _;
 use rp2040_hal as hal;
 
 use hal::clocks::init_clocks_and_plls;
-use hal::fugit::RateExtU32;
-use hal::gpio::{bank0::Gpio25, FunctionI2C, FunctionSioOutput, Pin, PullDown, PullUp};
+use hal::fugit::{HertzU32, RateExtU32};
+use hal::gpio::{bank0::Gpio25, FunctionI2C, FunctionSioOutput, FunctionUart, Pin, PullDown};
+use hal::gpio::{PullNone, PullUp};
+use hal::pac::interrupt;
+use hal::uart::{DataBits, StopBits, UartConfig, UartPeripheral, ValidUartPinout};
 use hal::{pac, pwm, Clock as _};
 
-use play::{idle, Stop};
+use play::{idle, Io, Stop};
 
 /// The second-stage bootloader for the Pico's W25Q080 flash: the boot ROM runs these first 256
 /// bytes of flash (`.boot2`, memory.x), which set up execute-in-place for the rest.
@@ -62,6 +76,7 @@ const PWM_TOP: u16 = 24_999;
 
 type Led = Pin<Gpio25, FunctionSioOutput, PullDown>;
 type PwmChannel<'a> = &'a mut dyn SetDutyCycle<Error = Infallible>;
+type Uart<P> = UartPeripheral<hal::uart::Enabled, pac::UART0, P>;
 
 #[hal::entry]
 fn main() -> ! {
@@ -97,12 +112,24 @@ fn main() -> ! {
     let timer = hal::Timer::new(pac.TIMER, &mut pac.RESETS, &clocks);
     let mut led: Led = pins.gpio25.reconfigure();
 
-    let Ok(clip) = play::parse_clip() else {
+    let Ok(embedded) = play::parse_clip() else {
         play::blink(&timer, |on| light(&mut led, on));
     };
+    let mut estop_pin = pins.gpio22.into_pull_up_input();
+    let estop = move || estop_pin.is_low().unwrap_or(false);
+    let uart_hz = clocks.peripheral_clock.freq();
 
     let _ = led.set_high();
     let played = if play::config::OUTPUT_PWM {
+        let uart_pins: (
+            Pin<_, FunctionUart, PullNone>,
+            Pin<_, FunctionUart, PullNone>,
+        ) = (pins.gpio16.reconfigure(), pins.gpio17.reconfigure());
+        let Some(uart) = serial(pac.UART0, uart_pins, &mut pac.RESETS, uart_hz) else {
+            play::blink(&timer, |on| light(&mut led, on));
+        };
+        info!("UART0: TX GP16, RX GP17, {=u32} baud", show::BAUD);
+        let send = |bytes: &[u8]| uart.write_full_blocking(bytes);
         let mut slices = pwm::Slices::new(pac.PWM, &mut pac.RESETS);
         servo_slice(&mut slices.pwm0);
         servo_slice(&mut slices.pwm1);
@@ -152,8 +179,23 @@ fn main() -> ! {
             "output: PWM on GP0-GP15, 50 Hz, {=u32} steps of 0.8 us per period",
             u32::from(PWM_TOP) + 1
         );
-        play::play(&clip, &timer, |outputs| PwmOutput::new(bank, outputs))
+        let io = Io { estop, send };
+        play::play(&embedded, &timer, io, |outputs| {
+            PwmOutput::new(bank, outputs)
+        })
     } else {
+        let uart_pins: (
+            Pin<_, FunctionUart, PullNone>,
+            Pin<_, FunctionUart, PullNone>,
+        ) = (pins.gpio0.reconfigure(), pins.gpio1.reconfigure());
+        let Some(uart) = serial(pac.UART0, uart_pins, &mut pac.RESETS, uart_hz) else {
+            play::blink(&timer, |on| light(&mut led, on));
+        };
+        info!("UART0: TX GP0, RX GP1, {=u32} baud", show::BAUD);
+        let io = Io {
+            estop,
+            send: |bytes: &[u8]| uart.write_full_blocking(bytes),
+        };
         let sda: Pin<_, FunctionI2C, PullUp> = pins.gpio16.reconfigure();
         let scl: Pin<_, FunctionI2C, PullUp> = pins.gpio17.reconfigure();
         let i2c = hal::I2C::i2c0(
@@ -169,7 +211,9 @@ fn main() -> ! {
             play::PCA9685_ADDRESS
         );
         match Pca9685Servos::new(i2c, Address::from(play::PCA9685_ADDRESS)) {
-            Ok(device) => play::play(&clip, &timer, |outputs| Pca9685Output::new(device, outputs)),
+            Ok(device) => play::play(&embedded, &timer, io, |outputs| {
+                Pca9685Output::new(device, outputs)
+            }),
             Err(_) => {
                 error!("the PCA9685 did not answer: check SDA GP16, SCL GP17, VCC 3V3, GND and its address pins");
                 Err(Stop)
@@ -178,6 +222,39 @@ fn main() -> ! {
     };
     let _ = led.set_low();
     play::finish(played, &timer, |on| light(&mut led, on))
+}
+
+/// UART0 on `pins` at [`show::BAUD`] 8N1, its receive interrupt on (each byte to
+/// `show::received`, [`UART0_IRQ`]).
+fn serial<P: ValidUartPinout<pac::UART0>>(
+    uart0: pac::UART0,
+    pins: P,
+    resets: &mut pac::RESETS,
+    peripheral_hz: HertzU32,
+) -> Option<Uart<P>> {
+    let config = UartConfig::new(show::BAUD.Hz(), DataBits::Eight, None, StopBits::One);
+    let Ok(mut uart) = UartPeripheral::new(uart0, pins, resets).enable(config, peripheral_hz)
+    else {
+        error!("UART0 set-up failed");
+        return None;
+    };
+    uart.enable_rx_interrupt();
+    // SAFETY: the handler (UART0_IRQ) only drains UART0's receive FIFO into the show's ring,
+    // which it shares through a critical section; unmasking breaks no critical section.
+    unsafe { pac::NVIC::unmask(pac::Interrupt::UART0_IRQ) };
+    Some(uart)
+}
+
+/// UART0's receive interrupt (FIFO level or receive timeout): every waiting byte to the show's
+/// ring.
+#[interrupt]
+fn UART0_IRQ() {
+    // SAFETY: reads only UART0's flag and data registers; the main code owns the peripheral
+    // but only writes the data register (transmit) and never reads it.
+    let uart = unsafe { &*pac::UART0::ptr() };
+    while uart.uartfr().read().rxfe().bit_is_clear() {
+        show::received(uart.uartdr().read().data().bits());
+    }
 }
 
 /// A PWM slice at 50 Hz for servos ([`PWM_DIV`], [`PWM_TOP`]).
