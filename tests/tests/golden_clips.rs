@@ -43,6 +43,7 @@ fn motion_clip(m: &Motion, codec: CodecChoice, specs: &[&str]) -> Vec<u8> {
         bound: bound(specs),
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

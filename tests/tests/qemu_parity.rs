@@ -42,6 +42,7 @@ fn encode_to(
         bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),
         key_interval,
+        index_layout: Default::default(),
     };
     let bytes = encode::encode(m, &opts).unwrap().bytes;
     std::fs::write(path, &bytes).unwrap();

@@ -303,6 +303,7 @@ fn two_channel_clip() -> Vec<u8> {
             },
             metres_per_unit: 1e-3,
             key_interval: None,
+            index_layout: Default::default(),
         },
     )
     .unwrap()
@@ -503,6 +504,7 @@ fn example_input(
         // Lengths in cm: the header's source unit 10 000 000 nm.
         metres_per_unit: 0.01,
         key_interval,
+        index_layout: Default::default(),
     };
     (motion, opts)
 }
@@ -697,6 +699,7 @@ fn missing_samples_example() {
         },
         metres_per_unit: 1e-3,
         key_interval: None,
+        index_layout: Default::default(),
     };
     let enc = encode_markers(&clip, &opts).unwrap();
     assert!(enc.error.max_mm <= 1.0);
