@@ -22,9 +22,9 @@ pub(crate) struct FastIndexCodec<'a> {
     delta_set: &'a [u8],
     payload: &'a [u8],
     /// Bytes of a key frame's record.
-    key_bytes: u64,
+    key_bytes: u32,
     /// Bytes of a delta frame's record.
-    delta_bytes: u64,
+    delta_bytes: u32,
 }
 
 /// What validating one set yields.
@@ -64,8 +64,8 @@ impl<'a> FastIndexCodec<'a> {
             key_set: key.bytes,
             delta_set: delta.bytes,
             payload,
-            key_bytes: key.record,
-            delta_bytes: delta.record,
+            key_bytes: u32::try_from(key.record).map_err(|_| malformed("record too long"))?,
+            delta_bytes: u32::try_from(delta.record).map_err(|_| malformed("record too long"))?,
         };
         let needed = codec.frame_offset(frames);
         if needed != payload.len() as u64 {
@@ -75,11 +75,6 @@ impl<'a> FastIndexCodec<'a> {
             });
         }
         Ok(codec)
-    }
-
-    /// True when frame `i` is a key frame.
-    pub(crate) fn is_key(&self, frame: u32) -> bool {
-        self.key_interval == 0 || frame.is_multiple_of(self.key_interval)
     }
 
     /// The key frame at or before `frame`.
@@ -93,29 +88,46 @@ impl<'a> FastIndexCodec<'a> {
         }
     }
 
+    /// Key frames before frame `i` (§4.4's `keys(i)`), and whether `i`
+    /// is one.
+    #[inline(always)]
+    fn keys_before(&self, frame: u32) -> (u32, bool) {
+        match frame.checked_div(self.key_interval) {
+            None => (frame, true),
+            Some(q) => {
+                let r = frame.wrapping_sub(q.wrapping_mul(self.key_interval));
+                (q.wrapping_add(u32::from(r != 0)), r == 0)
+            }
+        }
+    }
+
+    /// Byte offset of frame `i`'s record in the payload (§4.6), given
+    /// `keys` = `keys(i)`.
+    #[inline(always)]
+    fn offset(&self, frame: u32, keys: u32) -> u64 {
+        let deltas = frame.wrapping_sub(keys);
+        u64::from(keys)
+            .wrapping_mul(u64::from(self.key_bytes))
+            .wrapping_add(u64::from(deltas).wrapping_mul(u64::from(self.delta_bytes)))
+    }
+
     /// Byte offset of frame `i`'s record in the payload (§4.6).
     fn frame_offset(&self, frame: u32) -> u64 {
-        let keys = if self.key_interval == 0 {
-            u64::from(frame)
-        } else {
-            u64::from(frame).div_ceil(u64::from(self.key_interval))
-        };
-        let deltas = u64::from(frame).wrapping_sub(keys);
-        keys.wrapping_mul(self.key_bytes)
-            .wrapping_add(deltas.wrapping_mul(self.delta_bytes))
+        self.offset(frame, self.keys_before(frame).0)
     }
 
     /// Decodes frame `frame` into `state`, which must hold frame `frame - 1`
     /// when `frame` is a delta frame. `None` (with `state` partly written)
     /// only if an invariant of the validated section is broken.
     pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
-        let set = if self.is_key(frame) {
+        let (keys, key) = self.keys_before(frame);
+        let set = if key {
             state.fill(0);
             self.key_set
         } else {
             self.delta_set
         };
-        let start = usize::try_from(self.frame_offset(frame)).ok()?;
+        let start = usize::try_from(self.offset(frame, keys)).ok()?;
         decode_set(set, self.payload.get(start..)?, state)
     }
 }
@@ -140,12 +152,11 @@ fn decode_set(set: &[u8], mut record: &[u8], state: &mut [i32]) -> Option<()> {
             table: table.as_chunks::<4>().0,
             stride,
         };
-        let decode = if flags & FLAG_ACCUMULATE != 0 {
-            Group::decode::<true>
+        if flags & FLAG_ACCUMULATE != 0 {
+            g.decode::<true>(width, block, state);
         } else {
-            Group::decode::<false>
-        };
-        decode(&g, width, block, state);
+            g.decode::<false>(width, block, state);
+        }
     }
     Some(())
 }
@@ -188,7 +199,7 @@ impl Group<'_> {
     }
 
     /// Width 0: every channel's value is its one table entry.
-    #[inline(always)]
+    #[inline(never)]
     fn constant<const ACC: bool>(&self, state: &mut [i32]) {
         for (d, e) in self.dsts.iter().zip(self.table) {
             apply::<ACC>(*d, i32::from_le_bytes(*e), state);
@@ -198,7 +209,7 @@ impl Group<'_> {
     /// Widths `W` of 1, 2 and 4: `PER = 8 / W` fields per byte, LSB first,
     /// and tables of exactly `T = 2^W` entries, so a masked index is always
     /// inside its channel's table.
-    #[inline(always)]
+    #[inline(never)]
     fn narrow<const W: u32, const PER: usize, const T: usize, const ACC: bool>(
         &self,
         block: &[u8],
@@ -230,7 +241,7 @@ impl Group<'_> {
 
     /// Widths 8 and 16: one field per `B` bytes, little-endian, and tables
     /// of `stride` entries; an index past its table changes nothing.
-    #[inline(always)]
+    #[inline(never)]
     fn bytes<const B: usize, const ACC: bool>(&self, block: &[u8], state: &mut [i32]) {
         let tables = self.table.chunks_exact(self.stride.max(1));
         for ((d, f), t) in self.dsts.iter().zip(block.as_chunks::<B>().0).zip(tables) {

@@ -599,11 +599,49 @@ impl FastEntry {
     }
 }
 
+/// Most record bits per frame a group may add by joining the next wider
+/// group of its kind (SPEC.md §4.6): each group costs a decoder about 90
+/// instructions per frame on a Cortex-M3 (its header, its slices, its
+/// call), more than a few wider fields do.
+const MERGE_BITS: usize = 32;
+
+/// Moves the channels of a small group into the next wider group with the
+/// same accumulate flag when that adds at most [`MERGE_BITS`] per record.
+fn merge_small_groups(entries: &mut [FastEntry]) {
+    for acc in [false, true] {
+        let mut widths: Vec<(u8, usize)> = Vec::new();
+        for e in entries
+            .iter()
+            .filter(|e| e.accumulate == acc && e.width > 0)
+        {
+            match widths.iter_mut().find(|(w, _)| *w == e.width) {
+                Some((_, n)) => *n += 1,
+                None => widths.push((e.width, 1)),
+            }
+        }
+        widths.sort();
+        for i in 0..widths.len().saturating_sub(1) {
+            let (w, n) = widths[i];
+            let (wider, _) = widths[i + 1];
+            if n * usize::from(wider - w) <= MERGE_BITS {
+                for e in entries
+                    .iter_mut()
+                    .filter(|e| e.accumulate == acc && e.width == w)
+                {
+                    e.width = wider;
+                }
+                widths[i + 1].1 += n;
+            }
+        }
+    }
+}
+
 /// Groups entries by (width, accumulate) in a stable order and returns the
 /// set's bytes and its groups' entries in record order (SPEC.md §4.6). A
 /// group's tables are padded to its widest (with their last value).
 fn write_fast_set(entries: &[FastEntry]) -> (Vec<u8>, Vec<Vec<FastEntry>>) {
     let mut order: Vec<FastEntry> = entries.to_vec();
+    merge_small_groups(&mut order);
     order.sort_by_key(|e| (std::cmp::Reverse(e.width), e.accumulate, e.channel));
     let mut out = vec![0, 0];
     let mut groups = Vec::new();
@@ -860,6 +898,57 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
         key,
         delta,
         payload_bytes: section.len().saturating_sub(payload_at),
+    })
+}
+
+fn read_fast_set(s: &[u8], at: &mut usize) -> Option<Vec<GroupInfo>> {
+    let n = u16::from_le_bytes(s.get(*at..*at + 2)?.try_into().ok()?);
+    *at += 2;
+    let mut groups = Vec::new();
+    for _ in 0..n {
+        let h = s.get(*at..*at + FAST_GROUP_HEADER_LEN)?;
+        let count = usize::from(u16::from_le_bytes([h[2], h[3]]));
+        let stride = usize::from(u16::from_le_bytes([h[4], h[5]]));
+        *at += FAST_GROUP_HEADER_LEN;
+        let dsts = s.get(*at..*at + 2 * count)?;
+        *at += 2 * count + 4 * count * stride;
+        groups.push(GroupInfo {
+            bits: h[0],
+            accumulate: h[1] & FLAG_ACCUMULATE != 0,
+            channels: dsts
+                .chunks_exact(2)
+                .map(|d| u16::from_le_bytes([d[0], d[1]]))
+                .collect(),
+        });
+    }
+    Some(groups)
+}
+
+/// Reads the sets of an index section in the fast layout (SPEC.md §4.6)
+/// that the decoder validated; `table_entries` counts its `i32` entries.
+pub fn inspect_fast(section: &[u8]) -> Option<SectionInfo> {
+    let key_interval = u16::from_le_bytes(section.get(0..2)?.try_into().ok()?);
+    let mut at = 4;
+    let start = at;
+    let key = read_fast_set(section, &mut at)?;
+    let delta = if key_interval > 0 {
+        read_fast_set(section, &mut at)?
+    } else {
+        Vec::new()
+    };
+    let sets = at - start;
+    let dst_bytes: usize = key
+        .iter()
+        .chain(&delta)
+        .map(|g| FAST_GROUP_HEADER_LEN + 2 * g.channels.len())
+        .sum();
+    let header_bytes = 2 + if key_interval > 0 { 2 } else { 0 };
+    Some(SectionInfo {
+        key_interval,
+        table_entries: ((sets - dst_bytes - header_bytes) / 4) as u32,
+        key,
+        delta,
+        payload_bytes: section.len().saturating_sub(at),
     })
 }
 
