@@ -119,6 +119,7 @@ impl<'a> FastIndexCodec<'a> {
     /// Decodes frame `frame` into `state`, which must hold frame `frame - 1`
     /// when `frame` is a delta frame. `None` (with `state` partly written)
     /// only if an invariant of the validated section is broken.
+    #[inline(never)]
     pub(crate) fn decode_frame(&self, frame: u32, state: &mut [i32]) -> Option<()> {
         let (keys, key) = self.keys_before(frame);
         let set = if key {
