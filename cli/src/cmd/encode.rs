@@ -55,8 +55,8 @@ pub struct Args {
     key_interval: Option<u16>,
     /// Layout of the index codec's section: `compact` (SPEC.md §4.1, the
     /// smallest clip) or `fast` (SPEC.md §4.6: final-value tables, index
-    /// widths of 1, 2, 4, 8 or 16 bits on whole bytes — about 2.5× fewer
-    /// decode instructions on a Cortex-M3 for a larger clip; BENCHMARKS.md §2).
+    /// widths of 1, 2, 4, 8 or 16 bits on whole bytes — about 2.2× fewer
+    /// decode instructions on a Cortex-M3 for a ~60 % larger clip; BENCHMARKS.md §2).
     #[arg(long, default_value = "compact")]
     index_layout: mocap_encoder::codec::index::IndexLayout,
     /// Also write the clip as a source file beside the output.
