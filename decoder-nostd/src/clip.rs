@@ -155,6 +155,7 @@ impl<'a> Clip<'a> {
                     header = Some((id, payload));
                 }
                 consts::SECTION_CODEC_INDEX
+                | consts::SECTION_CODEC_INDEX_FAST
                 | consts::SECTION_CODEC_PCA_SPLINE
                 | consts::SECTION_CODEC_PREDICTIVE => {
                     if codec.is_some() {

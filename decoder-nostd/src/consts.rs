@@ -50,6 +50,8 @@ pub const SECTION_MISSING: u8 = 0x81;
 pub const SECTION_CODEC_PCA_SPLINE: u8 = 0x11;
 /// Section id of the `predictive` codec payload, §5b.
 pub const SECTION_CODEC_PREDICTIVE: u8 = 0x12;
+/// Section id of the `index` codec in its fast layout, §4.6.
+pub const SECTION_CODEC_INDEX_FAST: u8 = 0x13;
 
 /// Channel kind codes, SPEC.md §3.2 (`kind` field).
 pub mod kind {
@@ -89,6 +91,12 @@ pub mod index {
     pub const FLAG_ACCUMULATE: u8 = 0x80;
     /// Mask of the shift in group header byte 1.
     pub const SHIFT_MASK: u8 = 0x1F;
+    /// Bytes of a group header in the fast layout (§4.6): width, flags,
+    /// count, stride.
+    pub const FAST_GROUP_HEADER_LEN: usize = 6;
+    /// Index widths of the fast layout (§4.6): whole bytes, or fields that
+    /// never straddle a byte.
+    pub const FAST_WIDTHS: [u8; 6] = [0, 1, 2, 4, 8, 16];
 }
 
 /// `pca-spline` codec constants, SPEC.md §5.

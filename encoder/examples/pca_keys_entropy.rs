@@ -149,6 +149,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bound: Bound::from_specs(&specs),
             metres_per_unit: read.unit_or_detect().metres(),
             key_interval: None,
+            index_layout: Default::default(),
         };
         let enc = encode::encode(&read.motion, &opts)?;
         let clip = Clip::parse(&enc.bytes).map_err(|e| format!("{e:?}"))?;

@@ -231,6 +231,7 @@ mod tests {
             bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
             metres_per_unit: metres,
             key_interval: None,
+            index_layout: Default::default(),
         };
         let bytes = encode::encode(&m, &opts).unwrap().bytes;
         let clip = Clip::parse(&bytes).unwrap();

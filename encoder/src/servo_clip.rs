@@ -455,6 +455,7 @@ pub fn encode_servo_clip(
                 bound,
                 metres_per_unit: 1e-3,
                 key_interval: opts.key_interval,
+                index_layout: Default::default(),
             },
         )?;
         let bytes = attach_rig(&enc.bytes, rig, opts.names)?;

@@ -315,6 +315,7 @@ pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
         bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: mocap_encoder::units::detect(m).metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

@@ -74,6 +74,7 @@ fn roundtrip_file(file: &Path, codec: CodecChoice, bound: &str) -> (usize, usize
         bound: b,
         metres_per_unit: unit.metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     let enc = encode::encode(m, &opts).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     // Independent check: decode the bytes again, measure again.
@@ -230,6 +231,7 @@ fn auto_picks_the_smaller_codec() {
             bound,
             metres_per_unit: units::detect(&m).metres(),
             key_interval: None,
+            index_layout: Default::default(),
         };
         encode::encode(&m, &opts).unwrap()
     };
@@ -257,6 +259,7 @@ fn index_35_01_reaches_ratio_6_at_1deg() {
         bound: Bound::from_specs(&["1deg".parse().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     let enc = encode::encode(&m, &opts).unwrap();
     eprintln!("35_01 @ 1deg: {:?}", enc.metrics);

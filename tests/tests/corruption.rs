@@ -46,6 +46,7 @@ fn encode_with(
         bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),
         key_interval,
+        index_layout: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

@@ -29,6 +29,7 @@ fn firmware_default_clip_is_current() {
         bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     let enc = encode::encode(&m, &opts).unwrap();
     Clip::parse(&shipped).unwrap();

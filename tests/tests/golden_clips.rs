@@ -38,11 +38,21 @@ fn bound(specs: &[&str]) -> Bound {
 }
 
 fn motion_clip(m: &Motion, codec: CodecChoice, specs: &[&str]) -> Vec<u8> {
+    motion_clip_layout(m, codec, specs, Default::default())
+}
+
+fn motion_clip_layout(
+    m: &Motion,
+    codec: CodecChoice,
+    specs: &[&str],
+    index_layout: mocap_encoder::codec::index::IndexLayout,
+) -> Vec<u8> {
     let opts = EncodeOptions {
         codec,
         bound: bound(specs),
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
+        index_layout,
     };
     encode::encode(m, &opts).unwrap().bytes
 }
@@ -221,6 +231,24 @@ fn golden_index_clip() {
     check_case(
         "index_demo_1deg",
         &motion_clip(&demo(), CodecChoice::Index, &["1deg"]),
+    );
+}
+
+/// `index` in its fast layout (SPEC.md §4.6, section `0x13`): the demo,
+/// and the far-travelled demo whose key frames are in levels (§4.5).
+#[test]
+fn golden_index_fast_clips() {
+    use mocap_encoder::codec::index::IndexLayout;
+    let fast = |m: &Motion| motion_clip_layout(m, CodecChoice::Index, &["1deg"], IndexLayout::Fast);
+    let bytes = fast(&demo());
+    assert!(Clip::parse(&bytes)
+        .unwrap()
+        .sections()
+        .any(|s| s.id == 0x13));
+    check_case("index_fast_demo_1deg", &bytes);
+    check_case(
+        "index_fast_levels_far_demo_1deg",
+        &fast(&mocap_tests::far_travelled_demo()),
     );
 }
 

@@ -16,6 +16,7 @@ fn compact_and_full_headers_agree() {
         bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: mpu,
         key_interval: None,
+        index_layout: Default::default(),
     };
     let enc = encode::encode(&m, &opts).unwrap();
     let compact = Clip::parse(&enc.bytes).unwrap();

@@ -17,6 +17,7 @@ fn options(codec: CodecChoice, bound: &str, m: &Motion) -> (EncodeOptions, Vec<B
         bound: Bound::from_specs(&specs),
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     (opts, specs)
 }

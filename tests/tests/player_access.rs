@@ -14,6 +14,7 @@ fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),
         key_interval,
+        index_layout: Default::default(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }
@@ -128,6 +129,7 @@ fn pca_clip() -> Vec<u8> {
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }
@@ -221,6 +223,7 @@ fn pca_spline_cache_size_does_not_change_output() {
             ]),
             metres_per_unit: units::detect(&m).metres(),
             key_interval: None,
+            index_layout: Default::default(),
         };
         clips.push(("05_04".into(), encode::encode(&m, &opts).unwrap().bytes));
     }

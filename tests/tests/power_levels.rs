@@ -18,6 +18,7 @@ fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),
         key_interval,
+        index_layout: Default::default(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }

@@ -42,6 +42,7 @@ fn encode_with(m: &mocap_encoder::motion::Motion, codec: CodecChoice, bound: &st
         ),
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
+        index_layout: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

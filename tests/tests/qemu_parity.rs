@@ -18,6 +18,7 @@
 use std::path::{Path, PathBuf};
 
 use mocap_decoder::Clip;
+use mocap_encoder::codec::index::IndexLayout;
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{bvh, clipfile, generate, motion::Motion, units};
 use mocap_tests::snapshot::{check_snapshot, first_difference};
@@ -36,12 +37,14 @@ fn encode_to(
     codec: CodecChoice,
     bound: &str,
     key_interval: Option<u16>,
+    index_layout: IndexLayout,
 ) -> Vec<u8> {
     let opts = EncodeOptions {
         codec,
         bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),
         key_interval,
+        index_layout,
     };
     let bytes = encode::encode(m, &opts).unwrap().bytes;
     std::fs::write(path, &bytes).unwrap();
@@ -79,10 +82,29 @@ fn check_codec(
     key_interval: Option<u16>,
     sample_us: Option<u64>,
 ) {
+    check_codec_layout(
+        name,
+        m,
+        (codec, IndexLayout::Compact),
+        bound,
+        key_interval,
+        sample_us,
+    );
+}
+
+/// [`check_codec`] with the `index` codec's section layout.
+fn check_codec_layout(
+    name: &str,
+    m: &Motion,
+    (codec, layout): (CodecChoice, IndexLayout),
+    bound: &str,
+    key_interval: Option<u16>,
+    sample_us: Option<u64>,
+) {
     let dir = workspace_root().join("target/qemu-parity");
     std::fs::create_dir_all(&dir).unwrap();
     let path: PathBuf = dir.join(format!("{name}.mcb"));
-    let bytes = encode_to(m, &path, codec, bound, key_interval);
+    let bytes = encode_to(m, &path, codec, bound, key_interval, layout);
     let clip = Clip::parse(&bytes).unwrap();
     let (expected, what) = match sample_us {
         None => {
@@ -123,6 +145,25 @@ fn firmware_output_matches_host_on_every_core() {
     }
     if let Some(f) = corpus_file("iclone-cmu", "002_03.bvh") {
         check("iclone-002_03", &bvh::read_file(&f).unwrap(), Some(16));
+    }
+}
+
+/// `index` in its fast layout (SPEC.md §4.6): every frame and 50 Hz samples,
+/// at the default key interval and with every frame a key frame.
+#[test]
+fn index_fast_firmware_output_matches_host_on_every_core() {
+    if !qemu_available() {
+        return;
+    }
+    let fast = (CodecChoice::Index, IndexLayout::Fast);
+    let demo = generate::animatronic_demo();
+    check_codec_layout("fast-demo", &demo, fast, "1deg", None, None);
+    check_codec_layout("fast-demo-k0", &demo, fast, "1deg", Some(0), None);
+    if let Some(f) = corpus_file("cmu", "35_01.bvh") {
+        let m = bvh::read_file(&f).unwrap();
+        check_codec_layout("fast-cmu-35_01", &m, fast, "1deg", None, None);
+        let p = Some(SERVO_PERIOD_US);
+        check_codec_layout("fast-cmu-35_01-sampled", &m, fast, "1deg", None, p);
     }
 }
 

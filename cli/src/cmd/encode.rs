@@ -53,6 +53,12 @@ pub struct Args {
     /// block length in frames of the predictive codec (default: 10 s).
     #[arg(long)]
     key_interval: Option<u16>,
+    /// Layout of the index codec's section: `compact` (SPEC.md §4.1, the
+    /// smallest clip) or `fast` (SPEC.md §4.6: final-value tables, index
+    /// widths of 1, 2, 4, 8 or 16 bits on whole bytes — about 2.2× fewer
+    /// decode instructions on a Cortex-M3 for a ~60 % larger clip; BENCHMARKS.md §2).
+    #[arg(long, default_value = "compact")]
+    index_layout: mocap_encoder::codec::index::IndexLayout,
     /// Also write the clip as a source file beside the output.
     #[arg(long, value_enum)]
     emit: Option<Emit>,
@@ -201,6 +207,7 @@ pub fn run(a: Args) -> super::Result {
         bound,
         metres_per_unit: unit.metres(),
         key_interval: a.key_interval,
+        index_layout: a.index_layout,
     };
     let enc = match chip {
         None => {

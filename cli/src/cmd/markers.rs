@@ -81,6 +81,7 @@ pub fn encode(
         bound,
         metres_per_unit: unit.metres(),
         key_interval,
+        index_layout: Default::default(),
     };
     let enc = markers::encode_markers(&clip, &opts)?;
     let x = &enc.error;

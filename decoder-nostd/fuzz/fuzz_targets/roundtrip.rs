@@ -110,6 +110,7 @@ fuzz_target!(|input: Input| {
         bound: Bound::from_specs(&[BoundSpec::Degrees(bound_deg)]),
         metres_per_unit: METRES_PER_UNIT,
         key_interval: (input.key_interval != 0).then_some(u16::from(input.key_interval)),
+        index_layout: Default::default(),
     };
     // An encoder may refuse a motion (it says why); it must not write a clip that breaks the bound.
     let Ok(encoded) = encode(&m, &opts) else {

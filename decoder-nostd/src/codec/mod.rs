@@ -6,6 +6,8 @@ use crate::error::Error;
 
 #[cfg(feature = "codec-index")]
 pub(crate) mod index;
+#[cfg(feature = "codec-index")]
+pub(crate) mod index_fast;
 #[cfg(feature = "codec-pca-spline")]
 pub(crate) mod pca_spline;
 #[cfg(feature = "codec-predictive")]
@@ -15,6 +17,8 @@ pub(crate) mod spline;
 
 #[cfg(feature = "codec-index")]
 use index::IndexCodec;
+#[cfg(feature = "codec-index")]
+use index_fast::FastIndexCodec;
 #[cfg(feature = "codec-pca-spline")]
 use pca_spline::PcaSplineCodec;
 #[cfg(feature = "codec-predictive")]
@@ -25,6 +29,9 @@ use predictive::PredictiveCodec;
 pub(crate) enum Codec<'a> {
     #[cfg(feature = "codec-index")]
     Index(IndexCodec<'a>),
+    /// `index` in its fast layout (§4.6).
+    #[cfg(feature = "codec-index")]
+    IndexFast(FastIndexCodec<'a>),
     #[cfg(feature = "codec-pca-spline")]
     PcaSpline(PcaSplineCodec<'a>),
     #[cfg(feature = "codec-predictive")]
@@ -49,6 +56,10 @@ pub(crate) fn open_codec<'a>(
         crate::consts::SECTION_CODEC_INDEX => {
             Ok(Codec::Index(IndexCodec::parse(bytes, channels, frames)?))
         }
+        #[cfg(feature = "codec-index")]
+        crate::consts::SECTION_CODEC_INDEX_FAST => Ok(Codec::IndexFast(FastIndexCodec::parse(
+            bytes, channels, frames,
+        )?)),
         #[cfg(feature = "codec-pca-spline")]
         crate::consts::SECTION_CODEC_PCA_SPLINE => Ok(Codec::PcaSpline(PcaSplineCodec::parse(
             bytes, channels, frames,

@@ -114,6 +114,7 @@ impl<'a> Show<'a> {
                 consts::SECTION_SHOW => once(&mut table)?,
                 consts::SECTION_CUES => once(&mut cues)?,
                 consts::SECTION_CODEC_INDEX
+                | consts::SECTION_CODEC_INDEX_FAST
                 | consts::SECTION_CODEC_PCA_SPLINE
                 | consts::SECTION_CODEC_PREDICTIVE => codecs = codecs.wrapping_add(1),
                 consts::SECTION_MODEL_FIRST..=consts::SECTION_MODEL_LAST => {}
@@ -231,6 +232,7 @@ impl<'a> Show<'a> {
         if !matches!(
             id,
             consts::SECTION_CODEC_INDEX
+                | consts::SECTION_CODEC_INDEX_FAST
                 | consts::SECTION_CODEC_PCA_SPLINE
                 | consts::SECTION_CODEC_PREDICTIVE
         ) {

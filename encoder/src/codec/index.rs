@@ -10,11 +10,88 @@
 //! remainders, summed by accumulating key-set entries — the decoder's loop
 //! as it is. At `K = 0` that codes any valid clip.
 
-use mocap_decoder::consts::index::{ENTRY_LEN, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS};
+use mocap_decoder::consts::index::{
+    ENTRY_LEN, FAST_GROUP_HEADER_LEN, FAST_WIDTHS, FLAG_ACCUMULATE, GROUP_HEADER_LEN, MAX_BITS,
+};
 
 use super::bits::BitWriter;
 use super::quantizer::{self, Codebook};
 use super::CodecError;
+
+/// How an `index` section is laid out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IndexLayout {
+    /// SPEC.md §4.1–§4.5 (section `0x10`): the smallest clip — `i16` tables
+    /// under a shift and a base, indices of any width up to 12 bits packed
+    /// back to back. The default.
+    #[default]
+    Compact,
+    /// SPEC.md §4.6 (section `0x13`): the fewest decode instructions —
+    /// tables of final `i32` values, index widths rounded up to 1, 2, 4, 8
+    /// or 16 bits, each group's fields on whole bytes.
+    Fast,
+}
+
+impl IndexLayout {
+    /// Every layout, in command-line order.
+    pub const ALL: [IndexLayout; 2] = [IndexLayout::Compact, IndexLayout::Fast];
+
+    /// The command-line name (`compact`, `fast`).
+    pub fn name(self) -> &'static str {
+        match self {
+            IndexLayout::Compact => "compact",
+            IndexLayout::Fast => "fast",
+        }
+    }
+
+    /// The section id of this layout.
+    pub fn section_id(self) -> u8 {
+        match self {
+            IndexLayout::Compact => mocap_decoder::consts::SECTION_CODEC_INDEX,
+            IndexLayout::Fast => mocap_decoder::consts::SECTION_CODEC_INDEX_FAST,
+        }
+    }
+
+    /// Bits of `n` indices into `cb`, its table and its set entry.
+    fn coded_bits(self, cb: &Codebook, n: u64) -> u64 {
+        match self {
+            IndexLayout::Compact => coded_bits(cb, n),
+            // Rounded width; `i32` entries and a `u16` destination.
+            IndexLayout::Fast => {
+                let width = fast_width(cb.bits);
+                let entries = fast_stride(width, [cb.entries.len()]);
+                n * u64::from(width) + 32 * entries as u64 + 16
+            }
+        }
+    }
+}
+
+impl std::str::FromStr for IndexLayout {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        IndexLayout::ALL
+            .into_iter()
+            .find(|l| l.name() == s)
+            .ok_or_else(|| format!("unknown index layout '{s}' (compact, fast)"))
+    }
+}
+
+/// The field width of the fast layout (SPEC.md §4.6) for a codebook of
+/// `bits`: the smallest of 0, 1, 2, 4, 8, 16 that holds it.
+pub fn fast_width(bits: u8) -> u8 {
+    FAST_WIDTHS.into_iter().find(|&w| w >= bits).unwrap_or(16)
+}
+
+/// Entries per channel of a fast-layout group of `width` whose channels'
+/// codebooks have `lens` entries (SPEC.md §4.6): `2^width` for widths 1, 2
+/// and 4, else the largest codebook (1 for width 0).
+fn fast_stride(width: u8, lens: impl IntoIterator<Item = usize>) -> usize {
+    match width {
+        1 | 2 | 4 => 1 << width,
+        _ => lens.into_iter().max().unwrap_or(1).max(1),
+    }
+}
 
 /// Key-frame intervals the encoder tries when none is forced
 /// (0 = absolute codes only).
@@ -50,14 +127,14 @@ fn is_key(frame: usize, k: usize) -> bool {
 }
 
 /// Absolute coding of every frame.
-fn absolute(x: &[i64], tol: i64) -> Option<Candidate> {
+fn absolute(x: &[i64], tol: i64, layout: IndexLayout) -> Option<Candidate> {
     let cb = quantizer::fit(x, tol, MAX_BITS)?;
     let indices: Vec<u16> = x.iter().map(|&v| cb.nearest(v) as u16).collect();
     let decoded = indices
         .iter()
         .map(|&i| cb.value(usize::from(i)) as i32)
         .collect();
-    let bits = coded_bits(&cb, x.len() as u64);
+    let bits = layout.coded_bits(&cb, x.len() as u64);
     Some(Candidate {
         code: ChannelCode {
             key: cb,
@@ -78,7 +155,12 @@ const MAX_LEVELS: usize = 3;
 /// if a table covers the points, else a coarse table (tolerance `tol·2^k`,
 /// the `k` of the fewest bits) and the levels of the remainders. `None`
 /// if [`MAX_LEVELS`] do not reach.
-fn fit_levels(points: &[i64], tol: i64, depth: usize) -> Option<Vec<Codebook>> {
+fn fit_levels(
+    points: &[i64],
+    tol: i64,
+    depth: usize,
+    layout: IndexLayout,
+) -> Option<Vec<Codebook>> {
     if let Some(cb) = quantizer::fit(points, tol, MAX_BITS) {
         return Some(vec![cb]);
     }
@@ -95,12 +177,12 @@ fn fit_levels(points: &[i64], tol: i64, depth: usize) -> Option<Vec<Codebook>> {
             .iter()
             .map(|&p| p - coarse.value(coarse.nearest(p)))
             .collect();
-        let Some(finer) = fit_levels(&rest, tol, depth - 1) else {
+        let Some(finer) = fit_levels(&rest, tol, depth - 1, layout) else {
             continue;
         };
         let mut levels = vec![coarse];
         levels.extend(finer);
-        let bits = levels_bits(&levels, points.len() as u64);
+        let bits = levels_bits(&levels, points.len() as u64, layout);
         if best.as_ref().is_none_or(|(b, _)| bits < *b) {
             best = Some((bits, levels));
         }
@@ -123,8 +205,8 @@ fn code_levels(levels: &[Codebook], v: i64) -> (Vec<u16>, i32) {
 
 /// Every frame coded in levels at `K = 0` (SPEC.md §4.5): for channels no
 /// single table covers.
-fn absolute_levels(x: &[i64], tol: i64) -> Option<Candidate> {
-    let levels = fit_levels(x, tol, MAX_LEVELS)?;
+fn absolute_levels(x: &[i64], tol: i64, layout: IndexLayout) -> Option<Candidate> {
+    let levels = fit_levels(x, tol, MAX_LEVELS, layout)?;
     let mut per_level: Vec<Vec<u16>> = vec![Vec::with_capacity(x.len()); levels.len()];
     let mut decoded = Vec::with_capacity(x.len());
     for &v in x {
@@ -137,7 +219,7 @@ fn absolute_levels(x: &[i64], tol: i64) -> Option<Candidate> {
         }
         decoded.push(out);
     }
-    let bits = levels_bits(&levels, x.len() as u64);
+    let bits = levels_bits(&levels, x.len() as u64, layout);
     let mut levels = levels.into_iter().zip(per_level);
     let (key, indices) = levels.next()?;
     Some(Candidate {
@@ -170,14 +252,21 @@ fn coded_bits(cb: &Codebook, n: u64) -> u64 {
 }
 
 /// [`coded_bits`] of `n` values coded in `levels` (SPEC.md §4.5).
-fn levels_bits(levels: &[Codebook], n: u64) -> u64 {
-    levels.iter().map(|cb| coded_bits(cb, n)).sum()
+fn levels_bits(levels: &[Codebook], n: u64, layout: IndexLayout) -> u64 {
+    levels.iter().map(|cb| layout.coded_bits(cb, n)).sum()
 }
 
 /// Delta coding with key frames every `k`; tries delta codebooks of
 /// growing size and keeps the first whose closed loop meets `tol`. Key
 /// frames no table covers are coded in levels if `levels` allows.
-fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8, levels: bool) -> Option<Candidate> {
+fn delta(
+    x: &[i64],
+    tol: i64,
+    k: usize,
+    max_bits: u8,
+    levels: bool,
+    layout: IndexLayout,
+) -> Option<Candidate> {
     let keys: Vec<i64> = x
         .iter()
         .enumerate()
@@ -192,7 +281,7 @@ fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8, levels: bool) -> Option<Ca
         return None;
     }
     if let Some(key_cb) = quantizer::fit(&keys, tol, MAX_BITS) {
-        return delta_tables(x, tol, k, max_bits, &KeyCode::Table(key_cb), &steps);
+        return delta_tables(x, tol, k, max_bits, &KeyCode::Table(key_cb), &steps, layout);
     }
     if !levels {
         return None;
@@ -202,10 +291,18 @@ fn delta(x: &[i64], tol: i64, k: usize, max_bits: u8, levels: bool) -> Option<Ca
     // can leave the delta table, whose outer codes sit inside its steps'
     // range, no room to come back).
     for key_tol in [tol / 8, 0] {
-        let Some(levels) = fit_levels(&keys, key_tol, MAX_LEVELS) else {
+        let Some(levels) = fit_levels(&keys, key_tol, MAX_LEVELS, layout) else {
             continue;
         };
-        let c = delta_tables(x, tol, k, max_bits, &KeyCode::Levels(levels), &steps);
+        let c = delta_tables(
+            x,
+            tol,
+            k,
+            max_bits,
+            &KeyCode::Levels(levels),
+            &steps,
+            layout,
+        );
         if c.is_some() {
             return c;
         }
@@ -222,6 +319,7 @@ fn delta_tables(
     max_bits: u8,
     key_code: &KeyCode,
     steps: &[i64],
+    layout: IndexLayout,
 ) -> Option<Candidate> {
     // Delta codebooks with a tolerance below `tol` leave the closed loop room
     // to absorb the error carried from the previous frame.
@@ -230,7 +328,7 @@ fn delta_tables(
         let Some(cb) = quantizer::fit(steps, step_tol, max_bits) else {
             continue;
         };
-        if let Some(c) = closed_loop(x, tol, k, key_code, &cb) {
+        if let Some(c) = closed_loop(x, tol, k, key_code, &cb, layout) {
             return Some(c);
         }
     }
@@ -243,6 +341,7 @@ fn closed_loop(
     k: usize,
     key_code: &KeyCode,
     cb: &Codebook,
+    layout: IndexLayout,
 ) -> Option<Candidate> {
     let mut indices = Vec::with_capacity(x.len());
     let mut decoded = Vec::with_capacity(x.len());
@@ -284,10 +383,10 @@ fn closed_loop(
     let nk = (0..x.len()).filter(|&f| is_key(f, k)).count() as u64;
     let nd = x.len() as u64 - nk;
     let (key, levels, key_bits) = match key_code {
-        KeyCode::Table(key_cb) => (key_cb.clone(), Vec::new(), coded_bits(key_cb, nk)),
-        KeyCode::Levels(l) => (l[0].clone(), l[1..].to_vec(), levels_bits(l, nk)),
+        KeyCode::Table(key_cb) => (key_cb.clone(), Vec::new(), layout.coded_bits(key_cb, nk)),
+        KeyCode::Levels(l) => (l[0].clone(), l[1..].to_vec(), levels_bits(l, nk, layout)),
     };
-    let bits = key_bits + coded_bits(cb, nd);
+    let bits = key_bits + layout.coded_bits(cb, nd);
     Some(Candidate {
         code: ChannelCode {
             key,
@@ -304,18 +403,31 @@ fn closed_loop(
 /// coding `abs` (the same for every `k`) and delta coding. A channel no
 /// absolute table covers is delta-coded on key frames in levels, or at
 /// `k = 0` coded in levels; `None` if that fails too.
-fn code_channel(x: &[i64], tol: i64, k: usize, abs: Option<&Candidate>) -> Option<Candidate> {
+fn code_channel(
+    x: &[i64],
+    tol: i64,
+    k: usize,
+    abs: Option<&Candidate>,
+    layout: IndexLayout,
+) -> Option<Candidate> {
     let Some(abs) = abs else {
         return if k == 0 {
-            absolute_levels(x, tol)
+            absolute_levels(x, tol, layout)
         } else {
-            delta(x, tol, k, MAX_BITS, true)
+            delta(x, tol, k, MAX_BITS, true, layout)
         };
     };
     if k == 0 || abs.code.key.bits <= 1 {
         return Some(abs.clone());
     }
-    match delta(x, tol, k, abs.code.key.bits.saturating_sub(1), false) {
+    match delta(
+        x,
+        tol,
+        k,
+        abs.code.key.bits.saturating_sub(1),
+        false,
+        layout,
+    ) {
         Some(d) if d.bits < abs.bits => Some(d),
         _ => Some(abs.clone()),
     }
@@ -328,6 +440,8 @@ pub struct IndexEncoding {
     pub key_interval: u16,
     /// Per channel.
     pub channels: Vec<ChannelCode>,
+    /// The section layout [`IndexEncoding::to_section`] writes.
+    pub layout: IndexLayout,
 }
 
 /// Why a clip could not be coded.
@@ -346,6 +460,7 @@ pub fn encode(
     x: &[Vec<i32>],
     tol: &[i64],
     intervals: &[u16],
+    layout: IndexLayout,
 ) -> Result<IndexEncoding, ToleranceTooTight> {
     let wide: Vec<Vec<i64>> = x
         .iter()
@@ -355,7 +470,7 @@ pub fn encode(
     let absolutes: Vec<Option<Candidate>> = wide
         .iter()
         .enumerate()
-        .map(|(c, series)| absolute(series, tol[c].max(0)))
+        .map(|(c, series)| absolute(series, tol[c].max(0), layout))
         .collect();
     let mut best: Option<(u64, IndexEncoding)> = None;
     let mut failed: Option<usize> = None;
@@ -363,7 +478,8 @@ pub fn encode(
         let mut total = 0u64;
         let mut channels = Vec::with_capacity(x.len());
         for (c, (series, abs)) in wide.iter().zip(&absolutes).enumerate() {
-            let Some(cand) = code_channel(series, tol[c].max(0), usize::from(k), abs.as_ref())
+            let Some(cand) =
+                code_channel(series, tol[c].max(0), usize::from(k), abs.as_ref(), layout)
             else {
                 failed.get_or_insert(c);
                 continue 'intervals;
@@ -377,6 +493,7 @@ pub fn encode(
                 IndexEncoding {
                     key_interval: k,
                     channels,
+                    layout,
                 },
             ));
         }
@@ -387,6 +504,7 @@ pub fn encode(
         (None, None) => Ok(IndexEncoding {
             key_interval: 0,
             channels: Vec::new(),
+            layout,
         }),
     }
 }
@@ -457,6 +575,105 @@ fn write_set(entries: &[Entry]) -> (Vec<u8>, Vec<Entry>) {
     (out, order)
 }
 
+/// One coded channel of a set in the fast layout (SPEC.md §4.6).
+#[derive(Clone)]
+struct FastEntry {
+    channel: usize,
+    width: u8,
+    accumulate: bool,
+    /// Which of the channel's key levels (0 = `key`, SPEC.md §4.5).
+    level: u8,
+    /// The final values of its table.
+    values: Vec<i32>,
+}
+
+impl FastEntry {
+    fn new(channel: usize, cb: &Codebook, accumulate: bool, level: u8) -> Self {
+        FastEntry {
+            channel,
+            width: fast_width(cb.bits),
+            accumulate,
+            level,
+            values: (0..cb.entries.len()).map(|i| cb.value(i) as i32).collect(),
+        }
+    }
+}
+
+/// Most record bits per frame a group may add by joining the next wider
+/// group of its kind (SPEC.md §4.6): each group costs a decoder about 90
+/// instructions per frame on a Cortex-M3 (its header, its slices, its
+/// call), more than a few wider fields do.
+const MERGE_BITS: usize = 32;
+
+/// Moves the channels of a small group into the next wider group with the
+/// same accumulate flag when that adds at most [`MERGE_BITS`] per record.
+fn merge_small_groups(entries: &mut [FastEntry]) {
+    for acc in [false, true] {
+        let mut widths: Vec<(u8, usize)> = Vec::new();
+        for e in entries
+            .iter()
+            .filter(|e| e.accumulate == acc && e.width > 0)
+        {
+            match widths.iter_mut().find(|(w, _)| *w == e.width) {
+                Some((_, n)) => *n += 1,
+                None => widths.push((e.width, 1)),
+            }
+        }
+        widths.sort();
+        for i in 0..widths.len().saturating_sub(1) {
+            let (w, n) = widths[i];
+            let (wider, _) = widths[i + 1];
+            if n * usize::from(wider - w) <= MERGE_BITS {
+                for e in entries
+                    .iter_mut()
+                    .filter(|e| e.accumulate == acc && e.width == w)
+                {
+                    e.width = wider;
+                }
+                widths[i + 1].1 += n;
+            }
+        }
+    }
+}
+
+/// Groups entries by (width, accumulate) in a stable order and returns the
+/// set's bytes and its groups' entries in record order (SPEC.md §4.6). A
+/// group's tables are padded to its widest (with their last value).
+fn write_fast_set(entries: &[FastEntry]) -> (Vec<u8>, Vec<Vec<FastEntry>>) {
+    let mut order: Vec<FastEntry> = entries.to_vec();
+    merge_small_groups(&mut order);
+    order.sort_by_key(|e| (std::cmp::Reverse(e.width), e.accumulate, e.channel));
+    let mut out = vec![0, 0];
+    let mut groups = Vec::new();
+    for run in order.chunk_by(|a, b| (a.width, a.accumulate) == (b.width, b.accumulate)) {
+        for chunk in run.chunks(usize::from(u16::MAX)) {
+            let e0 = &chunk[0];
+            let stride = fast_stride(e0.width, chunk.iter().map(|e| e.values.len()));
+            let flags = if e0.accumulate { FLAG_ACCUMULATE } else { 0 };
+            let mut header = [0u8; FAST_GROUP_HEADER_LEN];
+            header[0] = e0.width;
+            header[1] = flags;
+            header[2..4].copy_from_slice(&(chunk.len() as u16).to_le_bytes());
+            header[4..6].copy_from_slice(&(stride as u16).to_le_bytes());
+            out.extend_from_slice(&header);
+            for e in chunk {
+                out.extend_from_slice(&(e.channel as u16).to_le_bytes());
+            }
+            for e in chunk {
+                let last = e.values.last().copied().unwrap_or(0);
+                for i in 0..stride {
+                    let v = e.values.get(i).copied().unwrap_or(last);
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+            groups.push(chunk.to_vec());
+        }
+    }
+    let n = groups.len() as u16;
+    out[0..2].copy_from_slice(&n.to_le_bytes());
+    (out, groups)
+}
+
 fn entry(channel: usize, cb: &Codebook, table: u16, accumulate: bool) -> Entry {
     Entry {
         channel: channel as u16,
@@ -473,6 +690,9 @@ impl IndexEncoding {
     /// The codec section bytes (SPEC.md §4.1). Fails if the table pool
     /// exceeds the 16-bit offsets of the format.
     pub fn to_section(&self) -> Result<Vec<u8>, CodecError> {
+        if self.layout == IndexLayout::Fast {
+            return Ok(self.to_fast_section());
+        }
         let mut pool = Pool {
             entries: Vec::new(),
         };
@@ -554,6 +774,58 @@ impl IndexEncoding {
         Ok(out)
     }
 
+    /// The section bytes in the fast layout (SPEC.md §4.6, id `0x13`).
+    fn to_fast_section(&self) -> Vec<u8> {
+        let mut key = Vec::new();
+        let mut delta = Vec::new();
+        for (c, ch) in self.channels.iter().enumerate() {
+            // Levels (§4.5) all accumulate.
+            let levels = !ch.levels.is_empty();
+            key.push(FastEntry::new(c, &ch.key, levels, 0));
+            for (l, (cb, _)) in ch.levels.iter().enumerate() {
+                key.push(FastEntry::new(c, cb, true, l as u8 + 1));
+            }
+            match &ch.delta {
+                // A delta codebook of one zero step never changes the value.
+                Some(d) if d.bits > 0 || d.value(0) != 0 => {
+                    delta.push(FastEntry::new(c, d, true, 0))
+                }
+                Some(_) => {}
+                // Absolute channels: constant ones keep the key frame's value.
+                None if ch.key.bits > 0 => delta.push(FastEntry::new(c, &ch.key, false, 0)),
+                None => {}
+            }
+        }
+        let (key_bytes, key_groups) = write_fast_set(&key);
+        let (delta_bytes, delta_groups) = write_fast_set(&delta);
+        let mut out = Vec::new();
+        out.extend_from_slice(&self.key_interval.to_le_bytes());
+        out.extend_from_slice(&(self.channels.len() as u16).to_le_bytes());
+        out.extend_from_slice(&key_bytes);
+        if self.key_interval > 0 {
+            out.extend_from_slice(&delta_bytes);
+        }
+        let frames = self.channels.first().map_or(0, |c| c.indices.len());
+        for f in 0..frames {
+            let is_key = self.key_interval == 0 || f % usize::from(self.key_interval) == 0;
+            let groups = if is_key { &key_groups } else { &delta_groups };
+            for g in groups {
+                // Each group's fields start on a byte (§4.6).
+                let mut bits = BitWriter::default();
+                for e in g {
+                    let ch = &self.channels[e.channel];
+                    let index = match e.level {
+                        0 => ch.indices[f],
+                        l => ch.levels[usize::from(l) - 1].1[f],
+                    };
+                    bits.write(u32::from(index), e.width);
+                }
+                out.extend_from_slice(&bits.finish());
+            }
+        }
+        out
+    }
+
     /// Decoded values per channel, as the decoder will produce them.
     pub fn decoded(&self) -> Vec<Vec<i32>> {
         self.channels.iter().map(|c| c.decoded.clone()).collect()
@@ -626,6 +898,57 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
         key,
         delta,
         payload_bytes: section.len().saturating_sub(payload_at),
+    })
+}
+
+fn read_fast_set(s: &[u8], at: &mut usize) -> Option<Vec<GroupInfo>> {
+    let n = u16::from_le_bytes(s.get(*at..*at + 2)?.try_into().ok()?);
+    *at += 2;
+    let mut groups = Vec::new();
+    for _ in 0..n {
+        let h = s.get(*at..*at + FAST_GROUP_HEADER_LEN)?;
+        let count = usize::from(u16::from_le_bytes([h[2], h[3]]));
+        let stride = usize::from(u16::from_le_bytes([h[4], h[5]]));
+        *at += FAST_GROUP_HEADER_LEN;
+        let dsts = s.get(*at..*at + 2 * count)?;
+        *at += 2 * count + 4 * count * stride;
+        groups.push(GroupInfo {
+            bits: h[0],
+            accumulate: h[1] & FLAG_ACCUMULATE != 0,
+            channels: dsts
+                .chunks_exact(2)
+                .map(|d| u16::from_le_bytes([d[0], d[1]]))
+                .collect(),
+        });
+    }
+    Some(groups)
+}
+
+/// Reads the sets of an index section in the fast layout (SPEC.md §4.6)
+/// that the decoder validated; `table_entries` counts its `i32` entries.
+pub fn inspect_fast(section: &[u8]) -> Option<SectionInfo> {
+    let key_interval = u16::from_le_bytes(section.get(0..2)?.try_into().ok()?);
+    let mut at = 4;
+    let start = at;
+    let key = read_fast_set(section, &mut at)?;
+    let delta = if key_interval > 0 {
+        read_fast_set(section, &mut at)?
+    } else {
+        Vec::new()
+    };
+    let sets = at - start;
+    let dst_bytes: usize = key
+        .iter()
+        .chain(&delta)
+        .map(|g| FAST_GROUP_HEADER_LEN + 2 * g.channels.len())
+        .sum();
+    let header_bytes = 2 + if key_interval > 0 { 2 } else { 0 };
+    Some(SectionInfo {
+        key_interval,
+        table_entries: ((sets - dst_bytes - header_bytes) / 4) as u32,
+        key,
+        delta,
+        payload_bytes: section.len().saturating_sub(at),
     })
 }
 

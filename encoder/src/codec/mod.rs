@@ -106,6 +106,10 @@ pub fn describe_section(
 ) -> Option<String> {
     match id {
         consts::SECTION_CODEC_INDEX => Some(index::inspect(section)?.describe(header, channels)),
+        consts::SECTION_CODEC_INDEX_FAST => Some(format!(
+            "  layout: fast (SPEC §4.6; bits are field widths)\n{}",
+            index::inspect_fast(section)?.describe(header, channels)
+        )),
         consts::SECTION_CODEC_PCA_SPLINE => Some(pca_spline::inspect(section)?.describe()),
         consts::SECTION_CODEC_PREDICTIVE => Some(predictive::inspect(section)?.describe()),
         _ => None,

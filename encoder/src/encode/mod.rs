@@ -31,6 +31,8 @@ pub struct EncodeOptions {
     /// (predictive codec); `None` = smallest clip (index) or
     /// [`crate::codec::predictive::DEFAULT_BLOCK_SECONDS`] (predictive).
     pub key_interval: Option<u16>,
+    /// The `index` codec's section layout (SPEC.md §4.1 or §4.6).
+    pub index_layout: crate::codec::index::IndexLayout,
 }
 
 /// An encoded clip and its measured quality.

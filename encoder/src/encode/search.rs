@@ -54,7 +54,7 @@ fn attempt(
         Some(k) => vec![k],
         None => index::KEY_INTERVALS.to_vec(),
     };
-    let enc = index::encode(&fixed.values, tol, &intervals).map_err(|e| {
+    let enc = index::encode(&fixed.values, tol, &intervals, opts.index_layout).map_err(|e| {
         EncodeError::ToleranceTooTight {
             channel: e.channel,
             name: m.skeleton.channel_names()[e.channel].clone(),
@@ -67,7 +67,7 @@ fn attempt(
     let mut a = prove(
         m,
         input,
-        (consts::SECTION_CODEC_INDEX, enc.to_section()?),
+        (opts.index_layout.section_id(), enc.to_section()?),
         Some(&expected),
         opts,
     )?;

@@ -375,6 +375,7 @@ fn encode_one(
             bound: c.bound,
             metres_per_unit: unit.metres(),
             key_interval: None,
+            index_layout: Default::default(),
         },
         progress,
     )

@@ -141,7 +141,7 @@ pub const MODELS: &[Model] = &[
 
 /// Peak stack of the playback path (`next_frame` and what it calls), the most measured.
 pub const PLAYBACK_STACK_BYTES: &[(Core, CodecKind, u32)] = &[
-    (Core::M0, CodecKind::Index, 820),
+    (Core::M0, CodecKind::Index, 828),
     (Core::M0, CodecKind::PcaSpline, 1596),
     (Core::M0, CodecKind::Predictive, 820),
     (Core::M3, CodecKind::Index, 748),

@@ -96,6 +96,7 @@ mod tests {
                     bound: Bound::from_specs(&[BoundSpec::Degrees(1.0)]),
                     metres_per_unit: crate::units::detect(&m).metres(),
                     key_interval: None,
+                    index_layout: Default::default(),
                 };
                 (codec, encode(&m, &opts))
             })

@@ -208,6 +208,7 @@ impl Source {
             bound: *bound,
             metres_per_unit: self.metres_per_unit,
             key_interval: None,
+            index_layout: Default::default(),
         };
         let t = Instant::now();
         let enc = match &self.markers {

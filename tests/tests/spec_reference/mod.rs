@@ -16,6 +16,7 @@ pub struct Clip {
 
 pub enum Codec {
     Index(Index),
+    IndexFast(IndexFast),
     PcaSpline(Pca),
     Predictive(Predictive),
 }
@@ -50,7 +51,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
     for (id, section) in sections(bytes, 1) {
         match id {
             0x01 | 0x02 => header = Some((id, section)),
-            0x10..=0x12 => codec = Some((id, section)),
+            0x10..=0x13 => codec = Some((id, section)),
             id => panic!("the reference reads no section {id:#04x}"),
         }
     }
@@ -59,6 +60,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
     let (id, section) = codec.expect("a codec section");
     let codec = match id {
         0x10 => Codec::Index(Index::parse(section, channels)),
+        0x13 => Codec::IndexFast(IndexFast::parse(section, channels)),
         0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
         _ => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
     };
@@ -79,6 +81,7 @@ impl Clip {
                 .collect(),
             Codec::Predictive(p) => p.decode(self.channels, self.frame_count),
             Codec::Index(x) => x.decode(self.channels, self.frame_count),
+            Codec::IndexFast(x) => x.decode(self.channels, self.frame_count),
         }
     }
 
@@ -99,7 +102,7 @@ impl Clip {
                 };
                 p.pose(pos, self.channels)
             }
-            Codec::Predictive(_) | Codec::Index(_) => {
+            Codec::Predictive(_) | Codec::Index(_) | Codec::IndexFast(_) => {
                 let frames = self.frames();
                 if i >= last {
                     return frames[last as usize].clone();
@@ -334,6 +337,121 @@ impl Index {
                         v
                     };
                 }
+            }
+            out.push(value.clone());
+        }
+        out
+    }
+}
+
+// ---------------------------------------------------------------- §4.6
+
+#[derive(Debug)]
+pub struct IndexFast {
+    pub key_interval: u32,
+    pub key_set: Vec<FastGroup>,
+    pub delta_set: Vec<FastGroup>,
+    pub payload: Vec<u8>,
+}
+
+/// A group of the fast layout: width, accumulate, stride, destinations and
+/// `tables[j]` (`S` entries each).
+#[derive(Debug)]
+pub struct FastGroup {
+    pub width: u32,
+    pub accumulate: bool,
+    pub dsts: Vec<usize>,
+    pub tables: Vec<Vec<i32>>,
+}
+
+impl IndexFast {
+    /// §4.6: the section.
+    pub fn parse(section: &[u8], channels: usize) -> IndexFast {
+        let mut r = Reader::new(section);
+        let u16_le = |r: &mut Reader<'_>| usize::from(u16::from_le_bytes([r.u8(), r.u8()]));
+        let key_interval = u16_le(&mut r) as u32;
+        assert_eq!(u16_le(&mut r), channels);
+        let set = |r: &mut Reader<'_>| -> Vec<FastGroup> {
+            (0..u16_le(r))
+                .map(|_| {
+                    let width = u32::from(r.u8());
+                    let flags = r.u8();
+                    let (n, stride) = (u16_le(r), u16_le(r));
+                    assert!(flags & 0x7F == 0);
+                    match width {
+                        0 => assert_eq!(stride, 1),
+                        1 | 2 | 4 => assert_eq!(stride, 1 << width),
+                        8 | 16 => assert!(stride >= 1 && stride <= 1 << width),
+                        _ => panic!("width {width}"),
+                    }
+                    let dsts: Vec<usize> = (0..n).map(|_| u16_le(r)).collect();
+                    assert!(dsts.iter().all(|&c| c < channels));
+                    let tables = (0..n)
+                        .map(|_| {
+                            (0..stride)
+                                .map(|_| i32::from_le_bytes(r.take(4).try_into().unwrap()))
+                                .collect()
+                        })
+                        .collect();
+                    FastGroup {
+                        width,
+                        accumulate: flags & 0x80 != 0,
+                        dsts,
+                        tables,
+                    }
+                })
+                .collect()
+        };
+        let key_set = set(&mut r);
+        assert!(key_set.iter().map(|g| g.dsts.len()).sum::<usize>() >= channels);
+        let delta_set = if key_interval > 0 {
+            set(&mut r)
+        } else {
+            Vec::new()
+        };
+        IndexFast {
+            key_interval,
+            key_set,
+            delta_set,
+            payload: r.bytes[r.pos..].to_vec(),
+        }
+    }
+
+    /// §4.6: every frame, in order.
+    pub fn decode(&self, channels: usize, frames: u32) -> Vec<Vec<i32>> {
+        let block = |g: &FastGroup| (g.dsts.len() * g.width as usize).div_ceil(8);
+        let bytes_of = |set: &[FastGroup]| -> usize { set.iter().map(block).sum() };
+        let (kb, db) = (bytes_of(&self.key_set), bytes_of(&self.delta_set));
+        let k = self.key_interval as usize;
+        let keys = |f: usize| if k == 0 { f } else { f.div_ceil(k) };
+        let start = |f: usize| keys(f) * kb + (f - keys(f)) * db;
+        assert_eq!(self.payload.len(), start(frames as usize));
+        let mut value = vec![0i32; channels];
+        let mut out = Vec::new();
+        for f in 0..frames as usize {
+            let key = k == 0 || f % k == 0;
+            if key {
+                value.fill(0);
+            }
+            let mut at = start(f);
+            for g in if key { &self.key_set } else { &self.delta_set } {
+                // Fields LSB first within the group's block.
+                let mut bits = Bits {
+                    bytes: &self.payload[at..at + block(g)],
+                    bit: 0,
+                };
+                for (j, &c) in g.dsts.iter().enumerate() {
+                    let i = bits.read(g.width) as usize;
+                    let Some(&v) = g.tables[j].get(i) else {
+                        continue;
+                    };
+                    value[c] = if g.accumulate {
+                        value[c].wrapping_add(v)
+                    } else {
+                        v
+                    };
+                }
+                at += block(g);
             }
             out.push(value.clone());
         }
@@ -929,6 +1047,7 @@ pub fn parse_show(bytes: &[u8]) -> Vec<(String, Clip)> {
         let (id, section) = sections[codec_at];
         let codec = match id {
             0x10 => Codec::Index(Index::parse(section, channels)),
+            0x13 => Codec::IndexFast(IndexFast::parse(section, channels)),
             0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
             0x12 => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
             id => panic!("clip {name}: section {id:#04x} is no codec"),
