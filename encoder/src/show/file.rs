@@ -670,7 +670,10 @@ mod tests {
         let cwd = std::env::current_dir().unwrap();
         let env = |v: &'static str| move |n: &str| (n == "CORPUS").then(|| v.to_string());
         let rel = expand_with("${CORPUS}/cmu/05_04.bvh", env("../data")).unwrap();
-        assert_eq!(rel, format!("{}/cmu/05_04.bvh", cwd.join("../data").display()));
+        assert_eq!(
+            rel,
+            format!("{}/cmu/05_04.bvh", cwd.join("../data").display())
+        );
         let abs = expand_with("${CORPUS}/x.bvh", env("/srv/data")).unwrap();
         assert_eq!(abs, "/srv/data/x.bvh");
         // a default stays as written (relative to the show file); so does a variable mid-path
