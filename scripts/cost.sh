@@ -7,7 +7,8 @@
 #
 #  1. encodes two sets of clips from the corpus ($MOCAP_CORPUS, default ../shared/data) and
 #     assets/ into target/cost/clips: the calibration set (the fit) and the validation set (held
-#     out: files the fit never sees), every codec at two bounds each;
+#     out: files the fit never sees), every codec (and `index` in its fast layout, named
+#     index-fast) at two bounds each;
 #  2. runs every clip in QEMU with -icount shift=0 (scripts/firmware.sh run --icount) on each
 #     board of --boards (fit and checked) and of --check-boards (checked only: a core the model
 #     predicts from another core's fit, the M4F from the M3's), rows into target/cost/measured.tsv;
@@ -74,7 +75,7 @@ sources=(
 bounds() {
     case "$1:$2" in
         *.c3d:*) echo "5mm 50mm+arms:10mm" ;;
-        *:index) echo "1deg 20mm" ;;
+        *:index|*:index-fast) echo "1deg 20mm" ;;
         *:pca-spline) echo "50mm+arms:10mm 20mm" ;;
         *:predictive) echo "1deg 0.25deg" ;;
     esac
@@ -87,12 +88,14 @@ encode_clips() {
     local s set name input codec b tag clip
     for s in "${sources[@]}"; do
         read -r set name input <<<"$s"
-        for codec in index pca-spline predictive; do
+        for codec in index pca-spline predictive index-fast; do
+            local args=(--codec "$codec")
+            [ "$codec" = index-fast ] && args=(--codec index --index-layout fast)
             for b in $(bounds "$input" "$codec"); do
                 tag="$(tr -c 'a-z0-9\n' '_' <<<"$b")"
                 clip="$out/clips/${name}_${codec}_${tag}.mcb"
                 if [ ! -s "$clip" ] || [ "$input" -nt "$clip" ]; then
-                    "$mocap" encode "$input" --codec "$codec" --max-error "$b" -o "$clip" >/dev/null 2>>"$out/encode.log" \
+                    "$mocap" encode "$input" "${args[@]}" --max-error "$b" -o "$clip" >/dev/null 2>>"$out/encode.log" \
                         || { echo "cost.sh: encoding $input ($codec, $b) failed; see $out/encode.log" >&2; exit 1; }
                 fi
                 clips+=("$set $clip")

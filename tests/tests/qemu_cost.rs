@@ -1,13 +1,14 @@
 //! The cost model of `mocap encode --target` (encoder/src/target/) against
 //! the instructions QEMU counts (`-icount shift=0`), on clips the fit never
 //! saw (`scripts/cost.sh` keeps 35_01 in its held-out set): on every board,
-//! every codec's predicted instructions per pose within ±15 % of the
-//! measured, the playback path's stack within the model's, and the player's
-//! state as the model computes it.
+//! every codec's predicted instructions per pose (`index` in both layouts)
+//! within ±15 % of the measured, the playback path's stack within the
+//! model's, and the player's state as the model computes it.
 //!
 //! Needs QEMU (as the parity tests) and the CMU corpus; prints SKIPPED
 //! without them (under `CI` a missing emulator fails).
 
+use mocap_encoder::codec::index::IndexLayout;
 use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::target::{self, cost};
 use mocap_encoder::{bvh, units};
@@ -29,9 +30,14 @@ fn stat(uart: &str, key: &str) -> u64 {
     stat_on(uart, "#", key)
 }
 
-/// `m` encoded with `codec` under `bound` (bounds joined by `+`, as on the
-/// command line).
-fn encode_with(m: &mocap_encoder::motion::Motion, codec: CodecChoice, bound: &str) -> Vec<u8> {
+/// `m` encoded with `codec` (`index` in `index_layout`) under `bound`
+/// (bounds joined by `+`, as on the command line).
+fn encode_with(
+    m: &mocap_encoder::motion::Motion,
+    codec: CodecChoice,
+    index_layout: IndexLayout,
+    bound: &str,
+) -> Vec<u8> {
     let opts = EncodeOptions {
         codec,
         bound: Bound::from_specs(
@@ -42,7 +48,7 @@ fn encode_with(m: &mocap_encoder::motion::Motion, codec: CodecChoice, bound: &st
         ),
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
-        index_layout: Default::default(),
+        index_layout,
     };
     encode::encode(m, &opts).unwrap().bytes
 }
@@ -60,16 +66,22 @@ fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
     let dir = std::env::temp_dir().join(format!("mocap-qemu-cost-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mut worst = 0.0f64;
-    for (codec, bound) in [
-        (CodecChoice::Index, "1deg"),
-        (CodecChoice::PcaSpline, "50mm+arms:10mm"),
-        (CodecChoice::Predictive, "1deg"),
+    for (codec, layout, bound) in [
+        (CodecChoice::Index, IndexLayout::Compact, "1deg"),
+        (
+            CodecChoice::PcaSpline,
+            IndexLayout::Compact,
+            "50mm+arms:10mm",
+        ),
+        (CodecChoice::Predictive, IndexLayout::Compact, "1deg"),
+        (CodecChoice::Index, IndexLayout::Fast, "1deg"),
     ] {
-        let bytes = encode_with(&m, codec, bound);
-        let clip = dir.join(format!("35_01_{}.mcb", codec.name()));
+        let bytes = encode_with(&m, codec, layout, bound);
+        let name = target::candidate_label(codec, layout);
+        let clip = dir.join(format!("35_01_{name}.mcb"));
         std::fs::write(&clip, &bytes).unwrap();
         let features = target::Features::of(&bytes).unwrap();
-        eprintln!("35_01 {} at {bound}: {} bytes", codec.name(), bytes.len());
+        eprintln!("35_01 {name} at {bound}: {} bytes", bytes.len());
         for board in boards() {
             let chip = target::chip(&board)
                 .unwrap_or_else(|| panic!("board {board} has no chip profile of the same name"));
@@ -79,7 +91,7 @@ fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
             let err = (predicted.instructions_per_pose - measured) / measured;
             eprintln!(
                 "{board} {}: measured {measured:.0}, predicted {:.0} ({:+.1} %), stack {} (model {})",
-                codec.name(),
+                name,
                 predicted.instructions_per_pose,
                 err * 100.0,
                 stat(&uart, "playback_stack_bytes"),
@@ -88,7 +100,7 @@ fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
             assert!(
                 err.abs() <= 0.15,
                 "{board} {}: predicted {:.0} instructions per pose, measured {measured:.0} ({:+.1} %)",
-                codec.name(),
+                name,
                 predicted.instructions_per_pose,
                 err * 100.0
             );
@@ -97,7 +109,7 @@ fn predicted_cost_is_within_15_percent_of_qemu_on_every_board() {
             assert!(
                 stack <= predicted.playback_stack_bytes,
                 "{board} {}: the playback path took {stack} B of stack, the model says {}",
-                codec.name(),
+                name,
                 predicted.playback_stack_bytes
             );
             // The firmware's player holds `max_channels` words.
@@ -128,7 +140,7 @@ fn predicted_cost_follows_the_players_capacity() {
         return;
     };
     let m = bvh::read_file(&path).unwrap();
-    let bytes = encode_with(&m, CodecChoice::PcaSpline, "5mm");
+    let bytes = encode_with(&m, CodecChoice::PcaSpline, IndexLayout::Compact, "5mm");
     let dir = std::env::temp_dir().join(format!("mocap-qemu-capacity-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let clip = dir.join("35_01_pca-spline_5mm.mcb");

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use mocap_encoder::codec::index::IndexLayout;
 use mocap_encoder::codec::CodecChoice;
 use mocap_encoder::encode::{self, Bound, BoundSpec, EncodeOptions};
 use mocap_encoder::motion::Motion;
@@ -57,8 +58,10 @@ pub struct Args {
     /// smallest clip) or `fast` (SPEC.md §4.6: final-value tables, index
     /// widths of 1, 2, 4, 8 or 16 bits on whole bytes — about 2.2× fewer
     /// decode instructions on a Cortex-M3 for a ~60 % larger clip; BENCHMARKS.md §2).
-    #[arg(long, default_value = "compact")]
-    index_layout: mocap_encoder::codec::index::IndexLayout,
+    /// Default: compact; with a chip as --target, both are tried and the
+    /// smaller clip that fits the budget is kept.
+    #[arg(long)]
+    index_layout: Option<IndexLayout>,
     /// Also write the clip as a source file beside the output.
     #[arg(long, value_enum)]
     emit: Option<Emit>,
@@ -207,7 +210,7 @@ pub fn run(a: Args) -> super::Result {
         bound,
         metres_per_unit: unit.metres(),
         key_interval: a.key_interval,
-        index_layout: a.index_layout,
+        index_layout: a.index_layout.unwrap_or_default(),
     };
     let enc = match chip {
         None => {
@@ -216,7 +219,7 @@ pub fn run(a: Args) -> super::Result {
             bar.finish();
             enc?
         }
-        Some(chip) => encode_for(&m, &opts, chip, &budget)?,
+        Some(chip) => encode_for(&m, &opts, a.index_layout, chip, &budget)?,
     };
     write(&a.output, &enc.bytes)?;
     let file_bytes = std::fs::metadata(&a.input).map(|m| m.len()).unwrap_or(0);
@@ -247,9 +250,11 @@ pub fn run(a: Args) -> super::Result {
 
 /// A motion clip for a chip: each candidate codec's clip, its predicted
 /// cost, and the smallest that fits the budget and the chip.
+/// `index` is tried in both layouts unless `--index-layout` names one.
 fn encode_for(
     m: &Motion,
     opts: &EncodeOptions,
+    layout: Option<IndexLayout>,
     chip: &'static Chip,
     budget: &Budget,
 ) -> super::Result<encode::Encoded> {
@@ -258,16 +263,24 @@ fn encode_for(
     } else {
         vec![opts.codec]
     };
-    let bar = crate::progress::Bar::new(codecs.len());
-    let results: Vec<_> = codecs
+    let variants: Vec<(CodecChoice, IndexLayout)> = codecs
         .iter()
-        .map(|&codec| {
+        .flat_map(|&codec| match (codec, layout) {
+            (CodecChoice::Index, None) => IndexLayout::ALL.map(|l| (codec, l)).to_vec(),
+            (_, l) => vec![(codec, l.unwrap_or_default())],
+        })
+        .collect();
+    let bar = crate::progress::Bar::new(variants.len());
+    let results: Vec<_> = variants
+        .iter()
+        .map(|&(codec, index_layout)| {
             let one = EncodeOptions {
                 codec,
+                index_layout,
                 ..opts.clone()
             };
             let r = encode::encode_with(m, &one, &bar);
-            (codec, r)
+            (target::candidate_label(codec, index_layout), r)
         })
         .collect();
     bar.finish();
@@ -311,7 +324,7 @@ fn encode_for(
         } else {
             format!("over: {}", c.overruns.join(", "))
         };
-        println!("  {:<10} {size}; {cost} [{verdict}]", c.codec.name());
+        println!("  {:<10} {size}; {cost} [{verdict}]", c.label);
     }
     let Some(best) = best else {
         return Err(format!(

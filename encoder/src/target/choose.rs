@@ -4,13 +4,15 @@
 use super::budget::Budget;
 use super::chips::Chip;
 use super::cost::{predict_capacities, Cost};
+use crate::codec::index::IndexLayout;
 use crate::codec::CodecChoice;
 use crate::encode::{EncodeError, Encoded};
 
 /// One codec's clip, judged.
 #[derive(Debug)]
 pub struct Candidate {
-    pub codec: CodecChoice,
+    /// The codec and layout (`index`, `index-fast`, `pca-spline`, …).
+    pub label: &'static str,
     /// The clip, or why the codec could not make one within the bound.
     pub encoded: Result<Encoded, EncodeError>,
     /// Predicted cost on the chip (or why there is none), for the player
@@ -24,6 +26,15 @@ pub struct Candidate {
 impl Candidate {
     pub fn fits(&self) -> bool {
         self.encoded.is_ok() && self.cost.is_ok() && self.overruns.is_empty()
+    }
+}
+
+/// The name a candidate is shown by: the codec's, `index-fast` for
+/// `index` in its fast layout.
+pub fn candidate_label(codec: CodecChoice, layout: IndexLayout) -> &'static str {
+    match (codec, layout) {
+        (CodecChoice::Index, IndexLayout::Fast) => "index-fast",
+        (c, _) => c.name(),
     }
 }
 
@@ -48,13 +59,13 @@ pub fn best_capacity(costs: Vec<Cost>, budget: &Budget) -> Result<Cost, String> 
 /// Judges every codec's result on `chip` under `budget`; returns them with
 /// the index of the smallest clip that fits (the first of equal sizes).
 pub fn choose(
-    results: impl IntoIterator<Item = (CodecChoice, Result<Encoded, EncodeError>)>,
+    results: impl IntoIterator<Item = (&'static str, Result<Encoded, EncodeError>)>,
     chip: &'static Chip,
     budget: &Budget,
 ) -> (Vec<Candidate>, Option<usize>) {
     let candidates: Vec<Candidate> = results
         .into_iter()
-        .map(|(codec, encoded)| {
+        .map(|(label, encoded)| {
             let cost = match &encoded {
                 Ok(e) => predict_capacities(&e.bytes, chip)
                     .map_err(|e| e.to_string())
@@ -63,7 +74,7 @@ pub fn choose(
             };
             let overruns = cost.as_ref().map_or(Vec::new(), |c| budget.overruns(c));
             Candidate {
-                codec,
+                label,
                 encoded,
                 cost,
                 overruns,
@@ -86,39 +97,42 @@ mod tests {
     use crate::generate::animatronic_demo;
     use crate::target::{chip, cost::CodecKind, Features};
 
-    fn results() -> Vec<(CodecChoice, Result<Encoded, EncodeError>)> {
+    /// Every codec's clip of the demo, `index` in both layouts.
+    fn results() -> Vec<(&'static str, Result<Encoded, EncodeError>)> {
         let m = animatronic_demo();
         AUTO_CODECS
             .iter()
-            .map(|&codec| {
+            .map(|&codec| (codec, IndexLayout::Compact))
+            .chain([(CodecChoice::Index, IndexLayout::Fast)])
+            .map(|(codec, index_layout)| {
                 let opts = EncodeOptions {
                     codec,
                     bound: Bound::from_specs(&[BoundSpec::Degrees(1.0)]),
                     metres_per_unit: crate::units::detect(&m).metres(),
                     key_interval: None,
-                    index_layout: Default::default(),
+                    index_layout,
                 };
-                (codec, encode(&m, &opts))
+                (candidate_label(codec, index_layout), encode(&m, &opts))
             })
             .collect()
     }
 
     #[test]
     fn features_name_the_codec_and_every_input() {
-        for (codec, r) in results() {
+        let mut kinds = Vec::new();
+        for (label, r) in results() {
             let bytes = r.unwrap().bytes;
             let f = Features::of(&bytes).unwrap();
-            let kind = match codec {
-                CodecChoice::Index => CodecKind::Index,
-                CodecChoice::PcaSpline => CodecKind::PcaSpline,
-                _ => CodecKind::Predictive,
-            };
-            assert_eq!(f.codec, kind);
+            assert_eq!(f.codec.name(), label);
+            kinds.push(f.codec);
+            let kind = f.codec;
             assert_eq!(f.x.len(), kind.feature_names().len());
             assert_eq!((f.x[0], f.x[1]), (1.0, f.channels as f64));
             assert!(f.state_words >= f.channels);
             assert!(f.x.iter().all(|v| v.is_finite() && *v >= 0.0));
         }
+        kinds.sort();
+        assert_eq!(kinds, CodecKind::ALL);
         assert!(Features::of(b"not a clip").is_err());
     }
 

@@ -18,13 +18,16 @@ pub enum CodecKind {
     Index,
     PcaSpline,
     Predictive,
+    /// `index` in its fast layout (SPEC.md §4.6, section `0x13`).
+    IndexFast,
 }
 
 impl CodecKind {
-    pub const ALL: [CodecKind; 3] = [
+    pub const ALL: [CodecKind; 4] = [
         CodecKind::Index,
         CodecKind::PcaSpline,
         CodecKind::Predictive,
+        CodecKind::IndexFast,
     ];
 
     pub fn name(self) -> &'static str {
@@ -32,6 +35,7 @@ impl CodecKind {
             CodecKind::Index => "index",
             CodecKind::PcaSpline => "pca-spline",
             CodecKind::Predictive => "predictive",
+            CodecKind::IndexFast => "index-fast",
         }
     }
 
@@ -58,6 +62,15 @@ impl CodecKind {
                 "constants not cached (zigzag varints read per pose)",
                 "key intervals entered x k per pose",
                 "cached, k > 8: sum of channels x k",
+            ],
+            CodecKind::IndexFast => &[
+                "1",
+                "channels",
+                "groups per pose",
+                "width-0 channels per pose",
+                "width 1/2/4 channels per pose",
+                "width 8/16 channels per pose",
+                "key frames x channels per pose (the clear)",
             ],
             CodecKind::Predictive => &[
                 "1",
@@ -166,6 +179,13 @@ impl Features {
                     ];
                     return Ok(out);
                 }
+                consts::SECTION_CODEC_INDEX_FAST => {
+                    let s = index::inspect_fast(sec.bytes).ok_or(FeatureError::NoCodec)?;
+                    out.codec = CodecKind::IndexFast;
+                    out.capacities = vec![channels];
+                    out.x = fast_index_features(&s, channels, frames);
+                    return Ok(out);
+                }
                 consts::SECTION_CODEC_PCA_SPLINE => {
                     let s = pca_spline::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
                     let need = pca_cache_words(&s).max(channels);
@@ -195,6 +215,34 @@ impl Features {
         }
         Err(FeatureError::NoCodec)
     }
+}
+
+/// The fast layout's features (SPEC.md §4.6): a pose runs the key set on
+/// a key frame (after clearing the state) and the delta set on the others,
+/// each group a loop by its width; the key sets weigh `keys / frames`.
+fn fast_index_features(s: &index::SectionInfo, channels: usize, frames: u32) -> Vec<f64> {
+    let f = f64::from(frames.max(1));
+    let key_weight = if s.key_interval == 0 {
+        1.0
+    } else {
+        f64::from(frames.div_ceil(u32::from(s.key_interval))) / f
+    };
+    // A key frame also clears the state: a store per channel.
+    let clear = key_weight * channels as f64;
+    let mut x = vec![1.0, channels as f64, 0.0, 0.0, 0.0, 0.0, clear];
+    for (groups, w) in [(&s.key, key_weight), (&s.delta, 1.0 - key_weight)] {
+        for g in groups {
+            let n = g.channels.len() as f64;
+            x[2] += w;
+            let col = match g.bits {
+                0 => 3,
+                1 | 2 | 4 => 4,
+                _ => 5,
+            };
+            x[col] += w * n;
+        }
+    }
+    x
 }
 
 /// Cache words a segment's groups take (SPEC.md §6, `pca_spline_cache`).

@@ -143,7 +143,7 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
         let a = DMatrix::from_fn(g.len(), params, |i, j| {
             g[i].features.x.get(j).copied().unwrap_or(0.0) / g[i].decode_per_pose.max(1.0)
         });
-        let coefficients = if codec == CodecKind::PcaSpline {
+        let coefficients = if matches!(codec, CodecKind::PcaSpline | CodecKind::IndexFast) {
             nonnegative_solve(&a)
         } else {
             solve(&a, &vec![true; params])

@@ -12,5 +12,5 @@ pub mod fit;
 
 pub use budget::{Budget, BudgetError};
 pub use chips::{chip, chip_names, Chip, Core, CHIPS};
-pub use choose::{best_capacity, choose, Candidate};
+pub use choose::{best_capacity, candidate_label, choose, Candidate};
 pub use cost::{predict, predict_capacities, CodecKind, Cost, CostError, Features};
