@@ -241,8 +241,15 @@ struct RawTrigger {
     cooldown_ms: Option<u32>,
 }
 
-/// Reads `${VAR}` references in a path from the environment.
+/// Reads `${VAR}` references in a path from the environment. A variable's value that begins
+/// the path and is itself relative (`MOCAP_CORPUS=../shared/data`) was typed relative to the
+/// user's working directory, as a shell would read it, so it is made absolute against it; a
+/// `:-` default stays relative to the show file like any path written in it.
 fn expand(s: &str) -> Result<String, String> {
+    expand_with(s, |name| std::env::var(name).ok())
+}
+
+fn expand_with(s: &str, var: impl Fn(&str) -> Option<String>) -> Result<String, String> {
     let mut out = String::new();
     let mut rest = s;
     while let Some(i) = rest.find("${") {
@@ -251,15 +258,20 @@ fn expand(s: &str) -> Result<String, String> {
         let Some(j) = after.find('}') else {
             return Err(format!("unterminated `${{` in `{s}`"));
         };
-        let var = &after[..j];
-        let (name, default) = match var.split_once(":-") {
+        let reference = &after[..j];
+        let (name, default) = match reference.split_once(":-") {
             Some((n, d)) => (n, Some(d)),
-            None => (var, None),
+            None => (reference, None),
         };
-        match (std::env::var(name), default) {
-            (Ok(v), _) => out.push_str(&v),
-            (Err(_), Some(d)) => out.push_str(d),
-            (Err(_), None) => return Err(format!("environment variable `{name}` is not set")),
+        match (var(name), default) {
+            (Some(v), _) if out.is_empty() && Path::new(&v).is_relative() && !v.is_empty() => {
+                let abs = std::path::absolute(&v)
+                    .map_err(|e| format!("`{name}`={v}: cannot resolve: {e}"))?;
+                out.push_str(&abs.to_string_lossy());
+            }
+            (Some(v), _) => out.push_str(&v),
+            (None, Some(d)) => out.push_str(d),
+            (None, None) => return Err(format!("environment variable `{name}` is not set")),
         }
         rest = &after[j + 1..];
     }
@@ -646,5 +658,28 @@ impl ShowSpec {
             idle,
             triggers,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::expand_with;
+
+    #[test]
+    fn a_relative_variable_is_read_from_the_working_directory() {
+        let cwd = std::env::current_dir().unwrap();
+        let env = |v: &'static str| move |n: &str| (n == "CORPUS").then(|| v.to_string());
+        let rel = expand_with("${CORPUS}/cmu/05_04.bvh", env("../data")).unwrap();
+        assert_eq!(
+            rel,
+            format!("{}/cmu/05_04.bvh", cwd.join("../data").display())
+        );
+        let abs = expand_with("${CORPUS}/x.bvh", env("/srv/data")).unwrap();
+        assert_eq!(abs, "/srv/data/x.bvh");
+        // a default stays as written (relative to the show file); so does a variable mid-path
+        assert_eq!(expand_with("${NONE:-../d}/x", env("")).unwrap(), "../d/x");
+        assert_eq!(expand_with("a/${CORPUS}/x", env("d")).unwrap(), "a/d/x");
+        assert!(expand_with("${NONE}/x", env("")).is_err());
+        assert!(expand_with("${CORPUS/x", env("d")).is_err());
     }
 }
