@@ -98,6 +98,14 @@ fn main() {
     copy_or_fail(&memory_src, &out_dir.join("memory.x"), "memory map");
     println!("cargo:rustc-link-search={}", out_dir.display());
     println!("cargo:rerun-if-changed={}", memory_src.display());
+    // riscv-rt's link.x, unlike cortex-m-rt's, does not INCLUDE memory.x (the map with its
+    // REGION_* aliases): it goes first. Link arguments of the binary, not rustflags in
+    // .cargo/config.toml: those would apply to esp32c3/ too (a directory below), whose HAL
+    // brings its own memory map and link script for the same target.
+    if target.starts_with("riscv32") {
+        println!("cargo:rustc-link-arg-bins=-Tmemory.x");
+        println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    }
 
     // ---- clip
     build_common::clip(&manifest_dir, &out_dir, &manifest_dir.join(DEFAULT_CLIP));

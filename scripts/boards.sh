@@ -62,12 +62,14 @@ mocap_board_memory() { _mocap_board_field "$1" '{ print $NF }'; }
 
 # Real boards (no emulator): built and sized by scripts/firmware.sh, never run here. Each is its
 # own crate under firmware-example/ (its own workspace and HAL). The last column is the file for
-# flashing without a probe: a UF2 family ID (the RP2040 boot ROM's drag-and-drop), or `bin`, the
-# flat image from the start of flash (the STM32 ROM's USB DFU: dfu-util).
-#   board      Rust target             crate (from firmware-example/)  image
+# flashing without a probe: a UF2 family ID (the RP2040 boot ROM's drag-and-drop), `bin`, the
+# flat image from the start of flash (the STM32 ROM's USB DFU: dfu-util), or `elf`, none besides
+# the ELF (the ESP32-C3: espflash and probe-rs write the ELF with the ESP-IDF bootloader).
+#   board      Rust target                  crate (from firmware-example/)  image
 MOCAP_HW_BOARD_TABLE='
-pico       thumbv6m-none-eabi      pico                            0xe48bff56
-blackpill  thumbv7em-none-eabihf   blackpill                       bin
+pico       thumbv6m-none-eabi           pico                            0xe48bff56
+blackpill  thumbv7em-none-eabihf        blackpill                       bin
+esp32c3    riscv32imc-unknown-none-elf  esp32c3                         elf
 '
 
 # mocap_hw_boards: the real boards' names, one per line.

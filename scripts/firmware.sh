@@ -50,12 +50,13 @@
 #       decoder_code_bytes (code of mocap_decoder::*, crc::* and the firmware's out-of-line calls
 #       into the decoder, where LTO inlines it), core_fmt_code_bytes (error messages only),
 #       firmware_own_code_bytes. Stack use is printed by `run` (# stack_bytes_used=).
-#   scripts/firmware.sh build --board pico|blackpill [--clip PATH.mcb] [--servo pca9685|pwm] [--figure RIG.toml] [--policy P]
+#   scripts/firmware.sh build --board pico|blackpill|esp32c3 [--clip PATH.mcb] [--servo pca9685|pwm] [--figure RIG.toml] [--policy P]
 #       A real board (scripts/boards.sh, MOCAP_HW_BOARD_TABLE; its own crate, firmware-example/pico/,
-#       firmware-example/blackpill/): builds the ELF and, beside it, the image to flash without a
-#       probe: pico a UF2 (scripts/uf2.rs), blackpill a flat .bin for USB DFU (llvm-objcopy).
-#       Prints the size lines of `size`, then uf2=PATH and uf2_bytes=N (bin=, bin_bytes=), and
-#       last the ELF's path. --servo picks the output (MOCAP_SERVO: pca9685 on I²C, the default,
+#       firmware-example/blackpill/, firmware-example/esp32c3/): builds the ELF and, beside it, the
+#       image to flash without a probe: pico a UF2 (scripts/uf2.rs), blackpill a flat .bin for USB
+#       DFU (llvm-objcopy); esp32c3 none (espflash or probe-rs flash the ELF itself).
+#       Prints the size lines of `size`, then uf2=PATH and uf2_bytes=N (bin=, bin_bytes=; none
+#       for esp32c3), and last the ELF's path. --servo picks the output (MOCAP_SERVO: pca9685 on I²C, the default,
 #       or pwm). A show as --clip builds the board's show mode (commands over its UART). `size` prints the same without the ELF's path; `run` is refused (no emulator:
 #       flash it with probe-rs, the UF2 or DFU, firmware-example/pico/README.md).
 #   scripts/firmware.sh boards
@@ -67,7 +68,7 @@
 #
 # Boards (scripts/boards.sh): lm3s6965 (default; Cortex-M3), microbit (Cortex-M0), mps2-an386 (Cortex-M4F),
 # riscv-virt (QEMU virt, RV32IMC); real boards, build and size only: pico (Raspberry Pi Pico, RP2040),
-# blackpill (WeAct STM32F411CE).
+# blackpill (WeAct STM32F411CE), esp32c3 (ESP32-C3, RV32IMC, esp-hal).
 # Clip: default firmware-example/clips/demo.mcb.
 # Toolchain: scripts/toolchain.sh (rustup target if installed, else Debian's -Zbuild-std route);
 # it installs missing packages itself (apt-get, root or sudo). Build/toolchain chatter goes to
@@ -170,7 +171,7 @@ if [ -n "$M0_ON_LM3S" ]; then
 fi
 HW_CRATE="$(mocap_hw_board_field "$BOARD" 3 2>/dev/null || true)"
 if [ -n "$HW_CRATE" ]; then
-    [ "$CMD" = run ] && die "board $BOARD is real hardware, not emulated: build it and flash the ELF (probe-rs) or the UF2 (firmware-example/$HW_CRATE/README.md)"
+    [ "$CMD" = run ] && die "board $BOARD is real hardware, not emulated: build it and flash the ELF (probe-rs) or its image (firmware-example/$HW_CRATE/README.md)"
     [ -z "$SAMPLE_US$STREAM$STREAM_TIMEOUT$ESTOP_AT$ENTROPY_BENCH$PLAYER_WORDS$POWER" ] \
         || die "board $BOARD takes --clip, --servo, --figure and --policy only"
     [ "$ICOUNT" -eq 0 ] && [ "$INPUT" = /dev/null ] || die "board $BOARD takes --clip, --servo, --figure and --policy only"
@@ -269,8 +270,9 @@ build() {
     printf '%s\n' "$elf"
 }
 
-# ---- a real board: its crate's ELF and the image beside it (UF2, or a flat .bin for DFU); prints
-# the size lines, uf2= and uf2_bytes= (or bin=, bin_bytes=) and (build) last the ELF's path
+# ---- a real board: its crate's ELF and the image beside it (UF2, a flat .bin for DFU, or none for
+# `elf`); prints the size lines, uf2= and uf2_bytes= (or bin=, bin_bytes=) and (build) last the
+# ELF's path
 hw_build() {
     local crate target_dir elf_dir elf image lock family
     stage_inputs
@@ -283,7 +285,11 @@ hw_build() {
     target_dir="$FW/target/fw"
     elf_dir="$FW/target/$BOARD/elf"
     elf="$elf_dir/mocap-firmware-$BOARD-$CLIP_SHA-f$FIGURE_SHA${POLICY:+-$POLICY}-${SERVO:-pca9685}.elf"
-    if [ "$family" = bin ]; then image="${elf%.elf}.bin"; else image="${elf%.elf}.uf2"; fi
+    case "$family" in
+        bin) image="${elf%.elf}.bin" ;;
+        elf) image="" ;;
+        *) image="${elf%.elf}.uf2" ;;
+    esac
     command -v llvm-objcopy >/dev/null 2>&1 || mocap_ensure_packages llvm >&2 || true
     mkdir -p "$elf_dir"
     lock="$FW/target/fw.lock"
@@ -297,13 +303,13 @@ hw_build() {
         mv -f "$elf.$$" "$elf"
         if [ "$family" = bin ]; then
             llvm-objcopy -O binary "$elf" "$image.$$" || build_failed "llvm-objcopy -O binary failed for $elf"
-        else
+        elif [ -n "$image" ]; then
             "$(uf2_tool)" "$elf" "$image.$$" --family "$family" || build_failed "UF2 conversion failed for $elf"
         fi
-        mv -f "$image.$$" "$image"
+        [ -z "$image" ] || mv -f "$image.$$" "$image"
     ) 9>"$lock" || exit $?
     size_report "$elf"
-    printf '%s=%s\n%s_bytes=%s\n' "${image##*.}" "$image" "${image##*.}" "$(stat -c %s "$image")"
+    [ -z "$image" ] || printf '%s=%s\n%s_bytes=%s\n' "${image##*.}" "$image" "${image##*.}" "$(stat -c %s "$image")"
     [ "$CMD" = size ] || printf '%s\n' "$elf"
 }
 
@@ -351,6 +357,23 @@ size_report() {
     local text data bss
     if [ -n "$size_tool" ]; then
         read -r text data bss _ < <("$size_tool" --format=berkeley "$elf" | sed -n 2p)
+        # llvm-size counts NOBITS sections without the write flag as text (esp-hal's `.stack`,
+        # `.rwdata_dummy`, `.rotext_dummy` on the ESP32-C3; the other boards have none): they
+        # take no flash, so they go to bss like every NOBITS section (the readelf rules below).
+        local misfiled
+        misfiled="$(readelf -S -W "$elf" 2>/dev/null | awk '
+            function hex(s,   i, n) {
+                n = 0; s = tolower(s);
+                for (i = 1; i <= length(s); i++) n = n * 16 + index("0123456789abcdef", substr(s, i, 1)) - 1;
+                return n;
+            }
+            /^ *\[ *[0-9]+\]/ {
+                sub(/^ *\[ *[0-9]+\] */, "");
+                if ($2 == "NOBITS" && $7 ~ /A/ && $7 !~ /W/) s += hex($5);
+            }
+            END { printf "%d\n", s }')"
+        text=$((text - ${misfiled:-0}))
+        bss=$((bss + ${misfiled:-0}))
     elif command -v readelf >/dev/null 2>&1; then
         # Berkeley rules on the section headers: alloc+exec or read-only -> text, alloc+write
         # progbits -> data, nobits -> bss.
@@ -372,11 +395,14 @@ size_report() {
     else
         die "neither llvm-size (package llvm) nor readelf (package binutils) is available"
     fi
-    # riscv-rt's `.heap` and `.stack` are NOBITS sections that only mark the free RAM (up to the
-    # top of RAM): not static RAM, as cortex-m-rt's layout has none. Both tools list sections
-    # with -A (name, size in decimal).
+    # riscv-rt's and esp-hal's `.heap` and `.stack` are NOBITS sections that only mark the free
+    # RAM (up to the top of RAM): not static RAM, as cortex-m-rt's layout has none. esp-hal's
+    # `.rotext_dummy` (ESP32-C3) only skips the flash-mapped rodata's span in the code's address
+    # window: neither RAM nor flash of its own. (Its `.rwdata_dummy` stays: the data RAM that the
+    # code copied to instruction RAM takes.) Both tools list sections with -A (name, size in
+    # decimal).
     local reserved
-    reserved="$("${size_tool:-size}" -A "$elf" 2>/dev/null | awk '$1 == ".stack" || $1 == ".heap" { s += $2 } END { print s + 0 }')"
+    reserved="$("${size_tool:-size}" -A "$elf" 2>/dev/null | awk '$1 == ".stack" || $1 == ".heap" || $1 == ".rotext_dummy" { s += $2 } END { print s + 0 }')"
     bss=$((bss - reserved))
     printf 'board=%s target=%s\n' "$BOARD" "$TARGET"
     printf 'text=%s\ndata=%s\nbss=%s\n' "$text" "$data" "$bss"

@@ -6,7 +6,7 @@
 //! links the show mode and not the clip playback, a clip build the other way round).
 
 use std::env;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::build_common::{
     self, copy_or_fail, fail, write_if_changed, DEFAULT_CLIP, DEFAULT_FIGURE,
@@ -16,13 +16,30 @@ use crate::build_common::{
 /// INCLUDEs; `-Tlink.x` itself comes from firmware-example/.cargo/config.toml), `link_args` for
 /// its binary, then the clip (default `firmware-example/clips/demo.mcb`), the figure (default
 /// `assets/rigs/animatronic_demo.toml`) and the output.
+#[allow(dead_code)] // each board's build.rs uses this or [`build_with_hal_link_script`]
 pub fn build(name: &str, target: &str, link_args: &[&str]) {
+    let (manifest_dir, out_dir) = dirs(name, target);
+    let memory = manifest_dir.join("memory.x");
+    copy_or_fail(&memory, &out_dir.join("memory.x"), "memory map");
+    println!("cargo:rustc-link-search={}", out_dir.display());
+    println!("cargo:rerun-if-changed={}", memory.display());
+    stage(name, &manifest_dir, &out_dir, link_args);
+}
+
+/// [`build`] for a board whose HAL brings the memory map and the link script (esp-hal's build
+/// script puts the chip's `memory.x` and `linkall.x` on the search path; `link_args` names the
+/// script): no `memory.x` of the crate's own.
+#[allow(dead_code)]
+pub fn build_with_hal_link_script(name: &str, target: &str, link_args: &[&str]) {
+    let (manifest_dir, out_dir) = dirs(name, target);
+    stage(name, &manifest_dir, &out_dir, link_args);
+}
+
+/// The crate's directory and OUT_DIR, once the build is checked to be for `target`.
+fn dirs(name: &str, target: &str) -> (PathBuf, PathBuf) {
     let manifest_dir =
         PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let out_dir = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
-    // firmware-example/, where the shared defaults live.
-    let examples = manifest_dir.join("..");
-
     let built_for = env::var("TARGET").unwrap_or_default();
     if built_for != target {
         fail(&format!(
@@ -30,18 +47,21 @@ pub fn build(name: &str, target: &str, link_args: &[&str]) {
              scripts/firmware.sh build --board … do this)"
         ));
     }
-    let memory = manifest_dir.join("memory.x");
-    copy_or_fail(&memory, &out_dir.join("memory.x"), "memory map");
-    println!("cargo:rustc-link-search={}", out_dir.display());
-    println!("cargo:rerun-if-changed={}", memory.display());
+    (manifest_dir, out_dir)
+}
+
+/// The link arguments, the clip, the figure and the output (`OUT_DIR/config.rs`).
+fn stage(name: &str, manifest_dir: &Path, out_dir: &Path, link_args: &[&str]) {
+    // firmware-example/, where the shared defaults live.
+    let examples = manifest_dir.join("..");
     // Link arguments of the binary only (not rustflags): the artifacts of the target directory
     // shared with the QEMU firmware stay valid for both.
     for arg in link_args {
         println!("cargo:rustc-link-arg-bins={arg}");
     }
 
-    build_common::clip(&manifest_dir, &out_dir, &examples.join(DEFAULT_CLIP));
-    build_common::figure(&manifest_dir, &out_dir, &examples.join(DEFAULT_FIGURE));
+    build_common::clip(manifest_dir, out_dir, &examples.join(DEFAULT_CLIP));
+    build_common::figure(manifest_dir, out_dir, &examples.join(DEFAULT_FIGURE));
 
     println!("cargo:rerun-if-env-changed=MOCAP_SERVO");
     let pwm = match env::var("MOCAP_SERVO").as_deref().map(str::trim) {

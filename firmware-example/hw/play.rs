@@ -1,7 +1,8 @@
-//! Playback on a real board, shared by the board firmwares (`pico/src/main.rs`, included there
-//! with `#[path]`): the board sets up its clocks, its timer (a [`Clock`]), its UART (a receive
-//! interrupt that hands bytes to `show::received`, and a way to send), its e-stop input and its
-//! servo output, then calls [`play`]. The figure is `../src/figure.rs`, the QEMU firmware's own.
+//! Playback on a real board, shared by the board firmwares (`pico/src/main.rs`,
+//! `blackpill/src/main.rs`, `esp32c3/src/main.rs`, included there with `#[path]`): the board
+//! sets up its clocks, its timer (a [`Clock`]), its UART (a receive interrupt that hands bytes
+//! to `show::received`, and a way to send), its e-stop input and its servo output, then calls
+//! [`play`]. The figure is `../src/figure.rs`, the QEMU firmware's own.
 //!
 //! - A servo clip is held to the figure (the policy, then its hard limits) and played through
 //!   `mocap_servo::Playback` at the rig's tick rate, then parked at the figure's limits.
@@ -94,7 +95,13 @@ pub fn finish(played: Result<(), Stop>, clock: &impl Clock, light: impl FnMut(bo
 /// Sleeps for good (the servos hold their last pulses).
 pub fn idle() -> ! {
     loop {
+        #[cfg(target_arch = "arm")]
         cortex_m::asm::wfi();
+        // RISC-V (the ESP32-C3): spins. After esp-hal's set-up its WFI gates the core's clock
+        // (SYSTEM_CPU_WAIT_MODE_FORCE_ON cleared); spinning keeps the core, and probe-rs's
+        // reading of the defmt log through its JTAG debug module, undisturbed.
+        #[cfg(not(target_arch = "arm"))]
+        core::hint::spin_loop();
     }
 }
 
