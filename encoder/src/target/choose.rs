@@ -3,7 +3,7 @@
 
 use super::budget::Budget;
 use super::chips::Chip;
-use super::cost::{predict_capacities, Cost};
+use super::cost::{predict_capacities, CodecKind, Cost};
 use crate::codec::index::IndexLayout;
 use crate::codec::CodecChoice;
 use crate::encode::{EncodeError, Encoded};
@@ -29,11 +29,11 @@ impl Candidate {
     }
 }
 
-/// The name a candidate is shown by: the codec's, `index-fast` for
-/// `index` in its fast layout.
+/// The name a candidate is shown by: the codec's, the cost model's
+/// `index-fast` for `index` in its fast layout.
 pub fn candidate_label(codec: CodecChoice, layout: IndexLayout) -> &'static str {
     match (codec, layout) {
-        (CodecChoice::Index, IndexLayout::Fast) => "index-fast",
+        (CodecChoice::Index, IndexLayout::Fast) => CodecKind::IndexFast.name(),
         (c, _) => c.name(),
     }
 }
@@ -95,7 +95,7 @@ mod tests {
     use super::*;
     use crate::encode::{encode, Bound, BoundSpec, EncodeOptions, AUTO_CODECS};
     use crate::generate::animatronic_demo;
-    use crate::target::{chip, cost::CodecKind, Features};
+    use crate::target::{chip, Features};
 
     /// Every codec's clip of the demo, `index` in both layouts.
     fn results() -> Vec<(&'static str, Result<Encoded, EncodeError>)> {
@@ -125,8 +125,7 @@ mod tests {
             let f = Features::of(&bytes).unwrap();
             assert_eq!(f.codec.name(), label);
             kinds.push(f.codec);
-            let kind = f.codec;
-            assert_eq!(f.x.len(), kind.feature_names().len());
+            assert_eq!(f.x.len(), f.codec.feature_names().len());
             assert_eq!((f.x[0], f.x[1]), (1.0, f.channels as f64));
             assert!(f.state_words >= f.channels);
             assert!(f.x.iter().all(|v| v.is_finite() && *v >= 0.0));
