@@ -17,7 +17,8 @@
 
 use defmt::{error, info, warn};
 use mocap_decoder::{Clip, Player, Show};
-use mocap_servo::output::ServoOutput;
+use mocap_servo::output::{Pca9685Output, ServoOutput};
+use mocap_servo::pca9685::{Address, Pca9685Servos};
 use mocap_servo::OutputError;
 
 use crate::figure::{self, Refusal, Rig};
@@ -198,6 +199,29 @@ pub fn play<O: ServoOutput>(
         // The rig starts at neutral: one write puts every servo there.
         rig.write(&mut output).map_err(output_failed)?;
         frames(clip, clock)
+    }
+}
+
+/// [`play`] on a PCA9685 at [`PCA9685_ADDRESS`] on `i2c`; `pins` names the board's I²C pins
+/// for the message when it does not answer.
+pub fn play_pca9685<I: embedded_hal::i2c::I2c>(
+    embedded: &Embedded,
+    clock: &impl Clock,
+    io: Io<impl FnMut() -> bool, impl FnMut(&[u8])>,
+    i2c: I,
+    pins: &str,
+) -> Result<(), Stop> {
+    match Pca9685Servos::new(i2c, Address::from(PCA9685_ADDRESS)) {
+        Ok(device) => play(embedded, clock, io, |outputs| {
+            Pca9685Output::new(device, outputs)
+        }),
+        Err(_) => {
+            error!(
+                "the PCA9685 did not answer: check {=str}, VCC 3V3, GND and its address pins",
+                pins
+            );
+            Err(Stop)
+        }
     }
 }
 

@@ -37,8 +37,7 @@ use defmt::{error, info};
 use defmt_rtt as _;
 use embedded_hal::pwm::SetDutyCycle;
 use embedded_io::Write as _;
-use mocap_servo::output::{Pca9685Output, PwmOutput};
-use mocap_servo::pca9685::{Address, Pca9685Servos};
+use mocap_servo::output::PwmOutput;
 use mocap_servo::ServoBank;
 use panic_probe as _;
 use stm32f4xx_hal::gpio::{Output, Pin, PushPull};
@@ -48,7 +47,7 @@ use stm32f4xx_hal::serial::{self, Serial};
 use stm32f4xx_hal::timer::CounterUs;
 use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 
-use play::{idle, Io, Stop};
+use play::{idle, Io};
 
 /// The Black Pill's crystal, and the core clock it runs at.
 const HSE_MHZ: u32 = 25;
@@ -183,15 +182,13 @@ fn main() -> ! {
             "output: PCA9685 at {=u8:#x} on I2C1 (SCL PB6, SDA PB7, 400 kHz), 50 Hz",
             play::PCA9685_ADDRESS
         );
-        match Pca9685Servos::new(i2c, Address::from(play::PCA9685_ADDRESS)) {
-            Ok(device) => play::play(&embedded, &clock, io, |outputs| {
-                Pca9685Output::new(device, outputs)
-            }),
-            Err(_) => {
-                error!("the PCA9685 did not answer: check SCL PB6, SDA PB7 (with pull-ups), VCC 3V3, GND and its address pins");
-                Err(Stop)
-            }
-        }
+        play::play_pca9685(
+            &embedded,
+            &clock,
+            io,
+            i2c,
+            "SCL PB6, SDA PB7 (with pull-ups)",
+        )
     };
     led.set_high(); // off
     play::finish(played, &clock, |on| light(&mut led, on))

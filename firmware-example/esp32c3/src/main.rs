@@ -44,11 +44,10 @@ use esp_hal::ledc::{LSGlobalClkSource, Ledc, LowSpeed};
 use esp_hal::time::{Instant, Rate};
 use esp_hal::uart::{Config as UartConfig, RxConfig, Uart, UartInterrupt};
 use esp_hal::{handler, main, Blocking};
-use mocap_servo::output::{Pca9685Output, PwmOutput};
-use mocap_servo::pca9685::{Address, Pca9685Servos};
+use mocap_servo::output::PwmOutput;
 use mocap_servo::ServoBank;
 
-use play::{idle, Io, Stop};
+use play::{idle, Io};
 
 // The application descriptor the ESP-IDF second-stage bootloader checks before it starts the
 // app (esp-bootloader-esp-idf): espflash and probe-rs flash that bootloader with the ELF.
@@ -165,15 +164,13 @@ fn main() -> ! {
             "output: PCA9685 at {=u8:#x} on I2C0 (SDA GPIO4, SCL GPIO5, 400 kHz), 50 Hz",
             play::PCA9685_ADDRESS
         );
-        match Pca9685Servos::new(i2c, Address::from(play::PCA9685_ADDRESS)) {
-            Ok(device) => play::play(&embedded, &clock, io, |outputs| {
-                Pca9685Output::new(device, outputs)
-            }),
-            Err(_) => {
-                error!("the PCA9685 did not answer: check SDA GPIO4, SCL GPIO5 (with pull-ups), VCC 3V3, GND and its address pins");
-                Err(Stop)
-            }
-        }
+        play::play_pca9685(
+            &embedded,
+            &clock,
+            io,
+            i2c,
+            "SDA GPIO4, SCL GPIO5 (with pull-ups)",
+        )
     };
     light(&mut led, false);
     play::finish(played, &clock, |on| light(&mut led, on))

@@ -42,8 +42,7 @@ use defmt::{error, info};
 use defmt_rtt as _;
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::pwm::SetDutyCycle;
-use mocap_servo::output::{Pca9685Output, PwmOutput};
-use mocap_servo::pca9685::{Address, Pca9685Servos};
+use mocap_servo::output::PwmOutput;
 use mocap_servo::ServoBank;
 use panic_probe as _;
 use rp2040_hal as hal;
@@ -56,7 +55,7 @@ use hal::pac::interrupt;
 use hal::uart::{DataBits, StopBits, UartConfig, UartPeripheral, ValidUartPinout};
 use hal::{pac, pwm, Clock as _};
 
-use play::{idle, Io, Stop};
+use play::{idle, Io};
 
 /// The second-stage bootloader for the Pico's W25Q080 flash: the boot ROM runs these first 256
 /// bytes of flash (`.boot2`, memory.x), which set up execute-in-place for the rest.
@@ -210,15 +209,7 @@ fn main() -> ! {
             "output: PCA9685 at {=u8:#x} on I2C0 (SDA GP16, SCL GP17, 400 kHz), 50 Hz",
             play::PCA9685_ADDRESS
         );
-        match Pca9685Servos::new(i2c, Address::from(play::PCA9685_ADDRESS)) {
-            Ok(device) => play::play(&embedded, &timer, io, |outputs| {
-                Pca9685Output::new(device, outputs)
-            }),
-            Err(_) => {
-                error!("the PCA9685 did not answer: check SDA GP16, SCL GP17, VCC 3V3, GND and its address pins");
-                Err(Stop)
-            }
-        }
+        play::play_pca9685(&embedded, &timer, io, i2c, "SDA GP16, SCL GP17")
     };
     let _ = led.set_low();
     play::finish(played, &timer, |on| light(&mut led, on))
