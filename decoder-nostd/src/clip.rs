@@ -154,10 +154,7 @@ impl<'a> Clip<'a> {
                     }
                     header = Some((id, payload));
                 }
-                consts::SECTION_CODEC_INDEX
-                | consts::SECTION_CODEC_INDEX_FAST
-                | consts::SECTION_CODEC_PCA_SPLINE
-                | consts::SECTION_CODEC_PREDICTIVE => {
+                id if consts::is_codec_section(id) => {
                     if codec.is_some() {
                         return Err(Error::ContainerDuplicateSection { id });
                     }
@@ -192,6 +189,7 @@ impl<'a> Clip<'a> {
         let codec = open_codec(
             codec_id,
             codec_bytes,
+            None,
             header.channel_count(),
             header.frame_count(),
         )?;

@@ -23,6 +23,8 @@ pub const SECTION_CUES: u8 = 0x05;
 pub const SECTION_MODEL_FIRST: u8 = 0x20;
 /// Last id of the shared model sections, §9.1.
 pub const SECTION_MODEL_LAST: u8 = 0x2F;
+/// Shared model section: the `pattern` codec's database, §11.2.
+pub const SECTION_MODEL_PATTERN: u8 = 0x20;
 /// Bytes before the section table: magic(4) version(1) flags(1) count(2).
 pub const PREAMBLE_LEN: usize = 8;
 /// Bytes per section-table entry: id(1) reserved(3) offset(4) length(4).
@@ -52,6 +54,21 @@ pub const SECTION_CODEC_PCA_SPLINE: u8 = 0x11;
 pub const SECTION_CODEC_PREDICTIVE: u8 = 0x12;
 /// Section id of the `index` codec in its fast layout, §4.6.
 pub const SECTION_CODEC_INDEX_FAST: u8 = 0x13;
+/// Section id of the `pattern` codec payload, §11.
+pub const SECTION_CODEC_PATTERN: u8 = 0x14;
+
+/// Whether `id` is a codec section's (§2.2): `index` (both layouts),
+/// `pca-spline`, `predictive`, `pattern`.
+pub const fn is_codec_section(id: u8) -> bool {
+    matches!(
+        id,
+        SECTION_CODEC_INDEX
+            | SECTION_CODEC_INDEX_FAST
+            | SECTION_CODEC_PCA_SPLINE
+            | SECTION_CODEC_PREDICTIVE
+            | SECTION_CODEC_PATTERN
+    )
+}
 
 /// Channel kind codes, SPEC.md §3.2 (`kind` field).
 pub mod kind {

@@ -80,6 +80,16 @@ pub mod pca_spline_cache {
     pub use crate::codec::pca_spline::cache::{CACHE_HEAD, GROUP_HEAD, INTERVAL};
 }
 
+/// The position, curve weights and values of the `pattern` codec (SPEC.md §11.4),
+/// public so the encoder checks its patterns against exactly what the
+/// decoder plays.
+#[cfg(feature = "codec-pattern")]
+pub mod pattern {
+    pub use crate::codec::pattern::{
+        interpolate, position, taps, weights, FLAG_SHARED, MAX_NODES, MAX_SEGMENT,
+    };
+}
+
 /// The prediction and reconstruction of the `predictive` codec (SPEC.md
 /// §5b), public so the encoder quantises against exactly what the decoder
 /// computes.

@@ -270,6 +270,8 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) -> Option<()> {
         Codec::IndexFast(c) => c.decode_frame(f, values),
         #[cfg(feature = "codec-predictive")]
         Codec::Predictive(c) => c.decode_frame(f, values),
+        #[cfg(feature = "codec-pattern")]
+        Codec::Pattern(c) => c.decode_frame(f, values),
         _ => {
             let _ = (f, values);
             Some(())

@@ -219,6 +219,16 @@ fn predictive_every_file_at_50mm_and_arms_10mm() {
 }
 
 #[test]
+fn pattern_every_file_at_1deg() {
+    every_motion_file(CodecChoice::Pattern, "1deg");
+}
+
+#[test]
+fn pattern_every_file_at_50mm_and_arms_10mm() {
+    every_motion_file(CodecChoice::Pattern, "50mm+arms:10mm");
+}
+
+#[test]
 fn auto_picks_the_smaller_codec() {
     let Some(files) = corpus_files("cmu") else {
         return;
@@ -240,7 +250,8 @@ fn auto_picks_the_smaller_codec() {
         .bytes
         .len()
         .min(size(CodecChoice::PcaSpline).bytes.len())
-        .min(size(CodecChoice::Predictive).bytes.len());
+        .min(size(CodecChoice::Predictive).bytes.len())
+        .min(size(CodecChoice::Pattern).bytes.len());
     assert_eq!(auto.bytes.len(), best);
     assert_ne!(auto.codec, CodecChoice::Auto);
 }

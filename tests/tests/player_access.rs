@@ -21,13 +21,14 @@ fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
 
 /// Frame codecs and their key intervals (index) or block lengths
 /// (predictive) under test.
-const FRAME_CODECS: [(CodecChoice, u16); 6] = [
+const FRAME_CODECS: [(CodecChoice, u16); 7] = [
     (CodecChoice::Index, 0),
     (CodecChoice::Index, 5),
     (CodecChoice::Index, 16),
     (CodecChoice::Predictive, 1),
     (CodecChoice::Predictive, 7),
     (CodecChoice::Predictive, 1000),
+    (CodecChoice::Pattern, 0),
 ];
 
 #[test]
@@ -57,6 +58,7 @@ fn sample_at_follows_the_spec() {
         (CodecChoice::Index, 8),
         (CodecChoice::Predictive, 7),
         (CodecChoice::Predictive, 1000),
+        (CodecChoice::Pattern, 0),
     ] {
         sample_at_follows_the_spec_for(codec, k);
     }

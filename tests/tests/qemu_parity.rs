@@ -192,6 +192,25 @@ fn pca_spline_firmware_output_matches_host_on_every_core() {
     }
 }
 
+/// pattern clips: every frame and 50 Hz samples.
+#[test]
+fn pattern_firmware_output_matches_host_on_every_core() {
+    if !qemu_available() {
+        return;
+    }
+    let codec = CodecChoice::Pattern;
+    check_frames_and_samples(
+        "pattern-demo",
+        &generate::animatronic_demo(),
+        codec,
+        "0.5deg",
+    );
+    if let Some(f) = corpus_file("cmu", "35_01.bvh") {
+        let m = bvh::read_file(&f).unwrap();
+        check_frames_and_samples("pattern-cmu-35_01", &m, codec, "50mm");
+    }
+}
+
 /// predictive clips: every frame and 50 Hz samples (the range decoder's
 /// state carried from frame to frame), and a predictive servo clip played
 /// in servo mode against `mocap play`.

@@ -319,3 +319,44 @@ fn values_do_not_depend_on_the_sampling_rate() {
         }
     }
 }
+
+/// `pattern` clips of one bound share one database (SPEC.md §11.2): one
+/// model section that every such clip reads, stored once, so a show of a
+/// repeated movement costs less than its clips as single files.
+#[test]
+fn pattern_clips_share_one_database() {
+    let d = dir("pattern");
+    let mut toml =
+        String::from("[show]\nname = \"p\"\nmax_error = \"0.1deg\"\ncodec = \"pattern\"\n");
+    for (clip, m) in [
+        ("a", wave(400, 30.0, 80.0, 0.0)),
+        ("b", wave(400, 30.0, 80.0, 0.0)),
+        ("c", wave(300, 20.0, 50.0, 1.0)),
+    ] {
+        mocap_encoder::bvh::write_file(&m, &d.join(format!("{clip}.bvh"))).unwrap();
+        toml += &format!("[[clip]]\nname = \"{clip}\"\nfile = \"{clip}.bvh\"\nunits = \"cm\"\n");
+    }
+    let spec = ShowSpec::parse(&toml, "test.toml", &d).unwrap();
+    let built = show::build(&spec).unwrap();
+    let s = Show::parse(&built.bytes).unwrap();
+    let models: Vec<u16> = (0..s.section_count())
+        .filter(|&i| s.sections().nth(usize::from(i)).unwrap().0 == 0x20)
+        .collect();
+    assert_eq!(models.len(), 1, "one database");
+    for i in 0..s.clip_count() {
+        let e = s.entry(i).unwrap();
+        assert_eq!(e.model_count, 1);
+        assert_eq!(e.models[0], models[0]);
+        // Every clip plays (the build checked each against its single clip).
+        let clip = s.clip(i).unwrap();
+        let mut p = Player::<8>::new(&clip).unwrap();
+        let mut out = [0i32; 2];
+        while p.next_frame(&mut out).unwrap().is_some() {}
+    }
+    assert!(
+        built.bytes.len() * 10 < built.singles_bytes() * 7,
+        "{} bytes against {} as single files",
+        built.bytes.len(),
+        built.singles_bytes()
+    );
+}

@@ -678,6 +678,11 @@ fn spec_has_examples_of_every_codec() {
             "SPEC.md §7 needs two examples of {name}"
         );
     }
+    // `pattern`: §7.7 here, its shared database in a show in spec_shows.rs.
+    assert!(
+        ids.contains(&0x14),
+        "SPEC.md §7 needs an example of pattern"
+    );
 }
 
 /// The reference decoder, written from the prose, gives the stated values

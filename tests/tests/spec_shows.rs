@@ -146,6 +146,10 @@ fn the_encoder_writes_the_show_examples_byte_for_byte() {
                     codec_section: u32::from(e.codec_section),
                     frames: e.frames,
                     looping: e.looping,
+                    models: e.models[..usize::from(e.model_count)]
+                        .iter()
+                        .map(|&m| u32::from(m))
+                        .collect(),
                 }
             })
             .collect();

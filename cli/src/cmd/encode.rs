@@ -259,7 +259,7 @@ fn encode_for(
     budget: &Budget,
 ) -> super::Result<encode::Encoded> {
     let codecs: Vec<CodecChoice> = if opts.codec == CodecChoice::Auto {
-        encode::AUTO_CODECS.to_vec()
+        mocap_encoder::target::CANDIDATE_CODECS.to_vec()
     } else {
         vec![opts.codec]
     };

@@ -37,6 +37,9 @@ pub enum CodecArg {
     PcaSpline,
     /// Prediction from the last two values, residuals range-coded (SPEC.md §5b).
     Predictive,
+    /// Motion pattern indexing: body-part nodes, segments as references to
+    /// time-normalised patterns (SPEC.md §11).
+    Pattern,
     /// Every codec; keep the smallest clip that meets the bound.
     Auto,
 }
@@ -47,6 +50,7 @@ impl From<CodecArg> for CodecChoice {
             CodecArg::Index => CodecChoice::Index,
             CodecArg::PcaSpline => CodecChoice::PcaSpline,
             CodecArg::Predictive => CodecChoice::Predictive,
+            CodecArg::Pattern => CodecChoice::Pattern,
             CodecArg::Auto => CodecChoice::Auto,
         }
     }

@@ -8,6 +8,8 @@ use crate::error::Error;
 pub(crate) mod index;
 #[cfg(feature = "codec-index")]
 pub(crate) mod index_fast;
+#[cfg(feature = "codec-pattern")]
+pub(crate) mod pattern;
 #[cfg(feature = "codec-pca-spline")]
 pub(crate) mod pca_spline;
 #[cfg(feature = "codec-predictive")]
@@ -19,6 +21,8 @@ pub(crate) mod spline;
 use index::IndexCodec;
 #[cfg(feature = "codec-index")]
 use index_fast::FastIndexCodec;
+#[cfg(feature = "codec-pattern")]
+use pattern::PatternCodec;
 #[cfg(feature = "codec-pca-spline")]
 use pca_spline::PcaSplineCodec;
 #[cfg(feature = "codec-predictive")]
@@ -36,21 +40,25 @@ pub(crate) enum Codec<'a> {
     PcaSpline(PcaSplineCodec<'a>),
     #[cfg(feature = "codec-predictive")]
     Predictive(PredictiveCodec<'a>),
+    #[cfg(feature = "codec-pattern")]
+    Pattern(PatternCodec<'a>),
     /// Never built: keeps `'a` used when every codec is compiled out.
     #[allow(dead_code)]
     None(core::marker::PhantomData<&'a ()>),
 }
 
 /// Validates the codec section `bytes` of id `id` against the header's
-/// channel and frame counts (SPEC.md §4–§5b); `ContainerNoCodec` for an id
+/// channel and frame counts (SPEC.md §4–§5b, §11), with `model` the pattern
+/// database a show clip reads (§9.2, §11.2); `ContainerNoCodec` for an id
 /// this build does not decode.
 pub(crate) fn open_codec<'a>(
     id: u8,
     bytes: &'a [u8],
+    model: Option<&'a [u8]>,
     channels: usize,
     frames: u32,
 ) -> Result<Codec<'a>, Error> {
-    let _ = (bytes, channels, frames);
+    let _ = (bytes, model, channels, frames);
     match id {
         #[cfg(feature = "codec-index")]
         crate::consts::SECTION_CODEC_INDEX => {
@@ -67,6 +75,10 @@ pub(crate) fn open_codec<'a>(
         #[cfg(feature = "codec-predictive")]
         crate::consts::SECTION_CODEC_PREDICTIVE => Ok(Codec::Predictive(PredictiveCodec::parse(
             bytes, channels, frames,
+        )?)),
+        #[cfg(feature = "codec-pattern")]
+        crate::consts::SECTION_CODEC_PATTERN => Ok(Codec::Pattern(PatternCodec::parse(
+            bytes, model, channels, frames,
         )?)),
         _ => Err(Error::ContainerNoCodec),
     }

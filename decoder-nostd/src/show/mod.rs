@@ -113,10 +113,7 @@ impl<'a> Show<'a> {
                 consts::SECTION_RIG => once(&mut rig)?,
                 consts::SECTION_SHOW => once(&mut table)?,
                 consts::SECTION_CUES => once(&mut cues)?,
-                consts::SECTION_CODEC_INDEX
-                | consts::SECTION_CODEC_INDEX_FAST
-                | consts::SECTION_CODEC_PCA_SPLINE
-                | consts::SECTION_CODEC_PREDICTIVE => codecs = codecs.wrapping_add(1),
+                id if consts::is_codec_section(id) => codecs = codecs.wrapping_add(1),
                 consts::SECTION_MODEL_FIRST..=consts::SECTION_MODEL_LAST => {}
                 consts::SECTION_RIG_DIGEST => {
                     if digest {
@@ -229,17 +226,20 @@ impl<'a> Show<'a> {
         let (id, codec_bytes) = self
             .section(entry.codec_section)
             .ok_or(Error::ShowClipCodec { clip: i })?;
-        if !matches!(
-            id,
-            consts::SECTION_CODEC_INDEX
-                | consts::SECTION_CODEC_INDEX_FAST
-                | consts::SECTION_CODEC_PCA_SPLINE
-                | consts::SECTION_CODEC_PREDICTIVE
-        ) {
+        if !consts::is_codec_section(id) {
             return Err(Error::ShowClipCodec { clip: i });
         }
         let header = self.header.with_frame_count(entry.frames);
-        let codec = open_codec(id, codec_bytes, header.channel_count(), entry.frames)?;
+        // The pattern codec's shared database: the clip's first model
+        // section, when it is one (§9.2, §11.2).
+        let model = entry
+            .models
+            .get(..usize::from(entry.model_count))
+            .and_then(<[u16]>::first)
+            .and_then(|&m| self.section(m))
+            .filter(|(id, _)| *id == consts::SECTION_MODEL_PATTERN)
+            .map(|(_, b)| b);
+        let codec = open_codec(id, codec_bytes, model, header.channel_count(), entry.frames)?;
         Ok(Clip::of_show(
             self.bytes,
             self.section_count,

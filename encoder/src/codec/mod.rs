@@ -4,6 +4,7 @@
 
 pub mod bits;
 pub mod index;
+pub mod pattern;
 pub mod pca_spline;
 pub mod predictive;
 pub mod quantizer;
@@ -22,25 +23,30 @@ pub enum CodecChoice {
     PcaSpline,
     /// Prediction from the last two values, residuals range-coded (SPEC.md §5b).
     Predictive,
+    /// Motion pattern indexing: body-part nodes, segments as references to
+    /// time-normalised patterns (SPEC.md §11).
+    Pattern,
     /// Every codec; keep the smallest clip that meets the bound.
     Auto,
 }
 
 impl CodecChoice {
     /// Every choice, in command-line order.
-    pub const ALL: [CodecChoice; 4] = [
+    pub const ALL: [CodecChoice; 5] = [
         CodecChoice::Index,
         CodecChoice::PcaSpline,
         CodecChoice::Predictive,
+        CodecChoice::Pattern,
         CodecChoice::Auto,
     ];
 
-    /// The command-line name (`index`, `pca-spline`, `predictive`, `auto`).
+    /// The command-line name (`index`, `pca-spline`, `predictive`, `pattern`, `auto`).
     pub fn name(self) -> &'static str {
         match self {
             CodecChoice::Index => "index",
             CodecChoice::PcaSpline => "pca-spline",
             CodecChoice::Predictive => "predictive",
+            CodecChoice::Pattern => "pattern",
             CodecChoice::Auto => "auto",
         }
     }
@@ -48,7 +54,7 @@ impl CodecChoice {
 
 /// A name that is not a codec.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown codec '{0}' (index, pca-spline, predictive, auto)")]
+#[error("unknown codec '{0}' (index, pca-spline, predictive, pattern, auto)")]
 pub struct UnknownCodec(pub String);
 
 impl FromStr for CodecChoice {
@@ -94,6 +100,17 @@ pub enum CodecError {
     /// A pca-spline key value range needs more bits than the format has.
     #[error("key value range too wide")]
     KeyRangeTooWide,
+    /// The pattern codec needs 1..=255 body-part nodes.
+    #[error("pattern codec: {0} body-part nodes (the format has 1..=255)")]
+    PatternNodes(usize),
+    /// A node of the pattern codec has more segments or patterns than the format's 65535.
+    #[error("pattern codec: a node has {segments} segments and {patterns} patterns (the format has at most 65535 of each)")]
+    PatternTooMany {
+        /// Segments of the node.
+        segments: usize,
+        /// Patterns of the node.
+        patterns: usize,
+    },
 }
 
 /// The lines `mocap info` prints under a codec section (`None` for other
@@ -112,6 +129,7 @@ pub fn describe_section(
         )),
         consts::SECTION_CODEC_PCA_SPLINE => Some(pca_spline::inspect(section)?.describe()),
         consts::SECTION_CODEC_PREDICTIVE => Some(predictive::inspect(section)?.describe()),
+        consts::SECTION_CODEC_PATTERN => Some(pattern::inspect(section)?.describe()),
         _ => None,
     }
 }
@@ -127,7 +145,7 @@ mod tests {
         }
         assert_eq!(
             "pca".parse::<CodecChoice>().unwrap_err().to_string(),
-            "unknown codec 'pca' (index, pca-spline, predictive, auto)"
+            "unknown codec 'pca' (index, pca-spline, predictive, pattern, auto)"
         );
     }
 }

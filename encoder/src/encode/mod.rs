@@ -7,11 +7,13 @@ mod bound;
 mod proof;
 mod reference;
 mod search;
+mod shared;
 
 pub use crate::codec::CodecChoice;
 pub use bound::{Bound, BoundError, BoundSpec};
 pub use reference::Reference;
 pub use search::{search_tolerances, Trial};
+pub use shared::{encode_pattern_shared, SharedPatterns};
 
 use crate::codec::CodecError;
 use crate::metrics::Metrics;
@@ -181,10 +183,11 @@ pub fn encode_with(
 }
 
 /// The codecs `auto` encodes with, in this order.
-pub const AUTO_CODECS: [CodecChoice; 3] = [
+pub const AUTO_CODECS: [CodecChoice; 4] = [
     CodecChoice::Index,
     CodecChoice::PcaSpline,
     CodecChoice::Predictive,
+    CodecChoice::Pattern,
 ];
 
 /// `auto`'s choice among the codecs' results (in [`AUTO_CODECS`] order): the

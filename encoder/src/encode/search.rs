@@ -1,6 +1,6 @@
 //! The searches: for each codec the coarsest setting whose proven clip
 //! still meets the bound — tightening or bisecting per-channel tolerances
-//! (`index`, `predictive`), bisecting the weighted tolerance `τ`
+//! (`index`, `predictive`, `pattern`), bisecting the weighted tolerance `τ`
 //! (`pca-spline`).
 
 use mocap_decoder::consts;
@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::proof::{prove, Attempt};
 use super::reference::Reference;
 use super::{Bound, CodecChoice, EncodeError, EncodeOptions, Encoded, Progress};
-use crate::codec::{index, pca_spline, predictive};
+use crate::codec::{index, pattern, pca_spline, predictive};
 use crate::fixed::FixedChannels;
 use crate::metrics::Metrics;
 use crate::motion::Motion;
@@ -30,6 +30,22 @@ fn attempt(
     progress: &dyn Progress,
 ) -> Result<Attempt, EncodeError> {
     let fixed = &input.fixed;
+    if opts.codec == CodecChoice::Pattern {
+        let nodes = pattern::nodes(m);
+        let accept = pattern::accept_for(&opts.bound);
+        let enc = pattern::encode(&fixed.values, tol, accept, &nodes, 1.0 / m.frame_time)?;
+        let expected = FixedChannels {
+            kinds: fixed.kinds.clone(),
+            values: enc.decoded,
+        };
+        return prove(
+            m,
+            input,
+            (pattern::SECTION_ID, enc.section),
+            Some(&expected),
+            opts,
+        );
+    }
     if opts.codec == CodecChoice::Predictive {
         let block = match opts.key_interval {
             Some(k) => u32::from(k.max(1)),
@@ -284,7 +300,7 @@ pub fn search_tolerances<T: Trial, E: From<EncodeError>>(
 
 /// [`search_tolerances`], calling `round(n, rounds)` as try `n` (from 1) of
 /// about `rounds` starts.
-fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
+pub(super) fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
     input: &Reference,
     bound: &Bound,
     mut run: impl FnMut(&[i64]) -> Result<T, E>,

@@ -176,6 +176,11 @@ impl BuiltShow {
     }
 }
 
+/// A motion clip of the `pattern` codec waiting to be coded with the
+/// others: its number, its cut motion, metres per unit, source range and
+/// source frame time.
+type PatternClip = (usize, Motion, f64, (usize, usize), f64);
+
 /// A clip encoded alone.
 struct Single {
     bytes: Vec<u8>,
@@ -206,7 +211,10 @@ pub fn build_with<'a>(
     let mut sources: HashMap<PathBuf, Motion> = HashMap::new();
     // The length unit a source declares (an ASF's), used unless the clip sets one.
     let mut declared: HashMap<PathBuf, LengthUnit> = HashMap::new();
-    let mut singles = Vec::new();
+    let mut singles: Vec<Option<Single>> = Vec::new();
+    // Motion clips of the `pattern` codec: coded together, one database
+    // per bound (§11.2), after the loop.
+    let mut patterns: Vec<PatternClip> = Vec::new();
     let mut first: Option<(usize, Vec<String>, f64)> = None;
     for (k, c) in spec.clips.iter().enumerate() {
         if !sources.contains_key(&c.file) {
@@ -247,8 +255,18 @@ pub fn build_with<'a>(
             }
         }
         let unit = declared.get(&c.file).copied();
+        if rig.is_none() && c.codec == CodecChoice::Pattern {
+            let metres = c
+                .units
+                .or(unit)
+                .unwrap_or_else(|| units::detect(&cut))
+                .metres();
+            patterns.push((k, cut, metres, range, m.frame_time));
+            singles.push(None);
+            continue;
+        }
         let p = progress(k, spec.clips.len(), &c.name);
-        singles.push(encode_one(
+        singles.push(Some(encode_one(
             c,
             &cut,
             rig.as_ref(),
@@ -256,9 +274,63 @@ pub fn build_with<'a>(
             m.frame_time,
             unit,
             p.as_ref(),
-        )?);
+        )?));
     }
-    assemble_show(spec, &singles)
+    let mut databases = Vec::new();
+    let mut in_show = vec![None; spec.clips.len()];
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, p) in patterns.iter().enumerate() {
+        match groups
+            .iter_mut()
+            .find(|g| spec.clips[patterns[g[0]].0].bound == spec.clips[p.0].bound)
+        {
+            Some(g) => g.push(i),
+            None => groups.push(vec![i]),
+        }
+    }
+    for group in groups {
+        let (k0, ..) = patterns[group[0]];
+        let c0 = &spec.clips[k0];
+        let motions: Vec<&Motion> = group.iter().map(|&i| &patterns[i].1).collect();
+        let metres: Vec<f64> = group.iter().map(|&i| patterns[i].2).collect();
+        let p = progress(k0, spec.clips.len(), &c0.name);
+        let opts = EncodeOptions {
+            codec: CodecChoice::Pattern,
+            bound: c0.bound,
+            metres_per_unit: metres[0],
+            key_interval: None,
+            index_layout: Default::default(),
+        };
+        let shared = encode::encode_pattern_shared(&motions, &metres, &opts, p.as_ref()).map_err(
+            |source| ShowError::Encode {
+                clip: c0.name.clone(),
+                file: c0.file.display().to_string(),
+                source,
+            },
+        )?;
+        let model = databases.len();
+        for ((&i, enc), section) in group.iter().zip(shared.clips).zip(shared.sections) {
+            let (k, _, _, range, source_frame_time) = patterns[i];
+            let x = &enc.metrics;
+            singles[k] = Some(Single {
+                proof: format!(
+                    "angle max {:.3}°, joint max {:.2} mm (bound {}; pattern database shared by {} clips)",
+                    x.angle_max_deg,
+                    x.max_joint_err_mm,
+                    spec.clips[k].bound,
+                    group.len()
+                ),
+                bytes: enc.bytes,
+                codec: CodecChoice::Pattern,
+                source_frame_time,
+                range,
+            });
+            in_show[k] = Some((section, model));
+        }
+        databases.push(shared.database);
+    }
+    let singles: Vec<Single> = singles.into_iter().flatten().collect();
+    assemble_show(spec, &singles, &in_show, &databases)
 }
 
 fn first_difference(a: &[String], b: &[String]) -> Option<String> {
@@ -447,11 +519,12 @@ fn shared_sections(clips: &[Clip<'_>]) -> Result<Shared, ShowError> {
 }
 
 /// The show's sections: header, rig, show table, cues, one codec section
-/// per clip, digest.
+/// per clip, the pattern databases (shared model sections), digest.
 fn show_sections(
     shared: &Shared,
     rows: &[TableRow],
     codecs: &[(u8, Vec<u8>)],
+    models: &[Vec<u8>],
     cues: &[u8],
 ) -> Vec<(u8, Vec<u8>)> {
     let mut out = vec![shared.header.clone()];
@@ -461,6 +534,11 @@ fn show_sections(
     out.push((consts::SECTION_SHOW, wire::show_table(rows)));
     out.push((consts::SECTION_CUES, cues.to_vec()));
     out.extend(codecs.iter().cloned());
+    out.extend(
+        models
+            .iter()
+            .map(|m| (consts::SECTION_MODEL_PATTERN, m.clone())),
+    );
     if let Some(d) = &shared.digest {
         out.push((consts::SECTION_RIG_DIGEST, d.clone()));
     }
@@ -472,7 +550,15 @@ fn first_codec_position(shared: &Shared) -> u32 {
     3 + u32::from(shared.rig.is_some())
 }
 
-fn assemble_show(spec: &ShowSpec, singles: &[Single]) -> Result<BuiltShow, ShowError> {
+/// Assembles the show of `singles`; clip `k` with `in_show[k] = (section,
+/// g)` plays in the show from that codec section and database
+/// `databases[g]` (its single clip holds the same database in its section).
+fn assemble_show(
+    spec: &ShowSpec,
+    singles: &[Single],
+    in_show: &[Option<(Vec<u8>, usize)>],
+    databases: &[Vec<u8>],
+) -> Result<BuiltShow, ShowError> {
     let clips: Vec<Clip<'_>> = singles
         .iter()
         .map(|s| Clip::parse(&s.bytes))
@@ -501,11 +587,16 @@ fn assemble_show(spec: &ShowSpec, singles: &[Single]) -> Result<BuiltShow, ShowE
             None => None,
             Some(l) => Some(loop_points(spec, c, l, s, frames, frame_ns)?),
         };
+        let models = in_show[i]
+            .as_ref()
+            .map(|(_, g)| vec![base + singles.len() as u32 + *g as u32])
+            .unwrap_or_default();
         rows.push(TableRow {
             name: c.name.clone(),
             codec_section: base + i as u32,
             frames,
             looping,
+            models,
         });
     }
     let cues = wire::cue_section(spec);
@@ -525,12 +616,15 @@ fn assemble_show(spec: &ShowSpec, singles: &[Single]) -> Result<BuiltShow, ShowE
             let mut one = row.clone();
             one.codec_section = base;
             one.looping = Some(Loop { seam, ..l });
+            // The single clip's section (its database inside).
+            one.models = Vec::new();
             let bytes = assemble_version(
                 consts::VERSION_SHOW,
                 &show_sections(
                     &one_clip(&clips[i])?,
                     &[one],
                     &codecs[i..=i],
+                    &[],
                     &cues_for_one(&cues),
                 ),
             );
@@ -543,7 +637,17 @@ fn assemble_show(spec: &ShowSpec, singles: &[Single]) -> Result<BuiltShow, ShowE
             seam = (seam + seam / 2 + 1).min(max_seam);
         }
     }
-    let sections = show_sections(&shared, &rows, &codecs, &cues);
+    // In the show, the clips that share a database read it from its model
+    // section.
+    let codecs: Vec<(u8, Vec<u8>)> = codecs
+        .into_iter()
+        .zip(in_show)
+        .map(|(c, s)| match s {
+            Some((section, _)) => (c.0, section.clone()),
+            None => c,
+        })
+        .collect();
+    let sections = show_sections(&shared, &rows, &codecs, databases, &cues);
     let bytes = assemble_version(consts::VERSION_SHOW, &sections);
     verify(&bytes, &clips)?;
     let built = spec
@@ -718,14 +822,7 @@ pub fn report(output: &Path, spec: &ShowSpec, built: &BuiltShow) -> String {
     let shared: Vec<String> = built
         .sections
         .iter()
-        .filter(|(id, _)| {
-            !matches!(
-                *id,
-                consts::SECTION_CODEC_INDEX
-                    | consts::SECTION_CODEC_PCA_SPLINE
-                    | consts::SECTION_CODEC_PREDICTIVE
-            )
-        })
+        .filter(|(id, _)| !consts::is_codec_section(*id))
         .map(|(id, len)| format!("{} {len} B", section_name(*id)))
         .collect();
     let _ = writeln!(
@@ -780,8 +877,16 @@ pub fn section_name(id: u8) -> &'static str {
         consts::SECTION_CODEC_INDEX => "index",
         consts::SECTION_CODEC_PCA_SPLINE => "pca-spline",
         consts::SECTION_CODEC_PREDICTIVE => "predictive",
+        consts::SECTION_CODEC_INDEX_FAST => "index (fast)",
+        consts::SECTION_CODEC_PATTERN => "pattern",
         consts::SECTION_RIG_DIGEST => "rig digest",
-        consts::SECTION_MODEL_FIRST..=consts::SECTION_MODEL_LAST => "shared model",
+        consts::SECTION_MODEL_FIRST..=consts::SECTION_MODEL_LAST => {
+            if id == consts::SECTION_MODEL_PATTERN {
+                "pattern database"
+            } else {
+                "shared model"
+            }
+        }
         _ => "ancillary",
     }
 }

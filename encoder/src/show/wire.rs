@@ -17,6 +17,8 @@ pub struct TableRow {
     pub frames: u32,
     /// Its loop.
     pub looping: Option<Loop>,
+    /// Positions of the shared model sections its codec reads (§9.2).
+    pub models: Vec<u32>,
 }
 
 /// The show table section (§9.2).
@@ -37,7 +39,10 @@ pub fn show_table(rows: &[TableRow]) -> Vec<u8> {
                 varint(&mut out, l.seam);
             }
         }
-        varint(&mut out, 0); // no shared model sections yet
+        varint(&mut out, r.models.len() as u32);
+        for &m in &r.models {
+            varint(&mut out, m);
+        }
     }
     out
 }

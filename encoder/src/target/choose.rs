@@ -93,14 +93,15 @@ pub fn choose(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::encode::{encode, Bound, BoundSpec, EncodeOptions, AUTO_CODECS};
+    use crate::encode::{encode, Bound, BoundSpec, EncodeOptions};
     use crate::generate::animatronic_demo;
+    use crate::target::CANDIDATE_CODECS;
     use crate::target::{chip, Features};
 
     /// Every codec's clip of the demo, `index` in both layouts.
     fn results() -> Vec<(&'static str, Result<Encoded, EncodeError>)> {
         let m = animatronic_demo();
-        AUTO_CODECS
+        CANDIDATE_CODECS
             .iter()
             .map(|&codec| (codec, IndexLayout::Compact))
             .chain([(CodecChoice::Index, IndexLayout::Fast)])

@@ -11,6 +11,16 @@ pub mod cost;
 pub mod fit;
 
 pub use budget::{Budget, BudgetError};
+
+use crate::encode::CodecChoice;
+
+/// The codecs `--codec auto --target` tries: those the cost model knows
+/// (`scripts/cost.sh` has no `pattern` rows yet).
+pub const CANDIDATE_CODECS: [CodecChoice; 3] = [
+    CodecChoice::Index,
+    CodecChoice::PcaSpline,
+    CodecChoice::Predictive,
+];
 pub use chips::{chip, chip_names, Chip, Core, CHIPS};
 pub use choose::{best_capacity, candidate_label, choose, Candidate};
 pub use cost::{predict, predict_capacities, CodecKind, Cost, CostError, Features};

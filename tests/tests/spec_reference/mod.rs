@@ -1,6 +1,6 @@
 //! A reference decoder written from SPEC.md's prose alone — the container
 //! (§2), the header in both forms (§3.1, §3.4), `index` (§4), `pca-spline`
-//! (§5) and `predictive` (§5b) — sharing no code with `mocap-decoder` or
+//! (§5), `predictive` (§5b) and `pattern` (§11) — sharing no code with `mocap-decoder` or
 //! `mocap-encoder`. The
 //! spec examples are decoded with it and with the real decoder; both must
 //! give the values SPEC.md states. Written for clarity, not speed: it
@@ -19,6 +19,7 @@ pub enum Codec {
     IndexFast(IndexFast),
     PcaSpline(Pca),
     Predictive(Predictive),
+    Pattern(Pattern),
 }
 
 /// §2 (§9.1 for `version` 2): preamble, section table, CRC; the sections
@@ -51,7 +52,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
     for (id, section) in sections(bytes, 1) {
         match id {
             0x01 | 0x02 => header = Some((id, section)),
-            0x10..=0x13 => codec = Some((id, section)),
+            0x10..=0x14 => codec = Some((id, section)),
             id => panic!("the reference reads no section {id:#04x}"),
         }
     }
@@ -62,6 +63,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
         0x10 => Codec::Index(Index::parse(section, channels)),
         0x13 => Codec::IndexFast(IndexFast::parse(section, channels)),
         0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
+        0x14 => Codec::Pattern(Pattern::parse(section, None, channels)),
         _ => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
     };
     Clip {
@@ -82,6 +84,9 @@ impl Clip {
             Codec::Predictive(p) => p.decode(self.channels, self.frame_count),
             Codec::Index(x) => x.decode(self.channels, self.frame_count),
             Codec::IndexFast(x) => x.decode(self.channels, self.frame_count),
+            Codec::Pattern(p) => (0..self.frame_count)
+                .map(|f| p.frame(f, self.frame_count, self.channels))
+                .collect(),
         }
     }
 
@@ -102,7 +107,7 @@ impl Clip {
                 };
                 p.pose(pos, self.channels)
             }
-            Codec::Predictive(_) | Codec::Index(_) | Codec::IndexFast(_) => {
+            Codec::Predictive(_) | Codec::Index(_) | Codec::IndexFast(_) | Codec::Pattern(_) => {
                 let frames = self.frames();
                 if i >= last {
                     return frames[last as usize].clone();
@@ -1041,15 +1046,21 @@ pub fn parse_show(bytes: &[u8]) -> Vec<(String, Clip)> {
                 "loop points"
             );
         }
-        for _ in 0..r.varint() {
-            r.varint(); // shared model sections: no codec reads one yet
-        }
+        let models: Vec<usize> = (0..r.varint()).map(|_| r.varint() as usize).collect();
         let (id, section) = sections[codec_at];
         let codec = match id {
             0x10 => Codec::Index(Index::parse(section, channels)),
             0x13 => Codec::IndexFast(IndexFast::parse(section, channels)),
             0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
             0x12 => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
+            0x14 => {
+                // §11.1: a SHARED section reads the clip's first model section.
+                let model = models.first().map(|&m| {
+                    assert_eq!(sections[m].0, 0x20, "a pattern database model");
+                    sections[m].1
+                });
+                Codec::Pattern(Pattern::parse(section, model, channels))
+            }
             id => panic!("clip {name}: section {id:#04x} is no codec"),
         };
         sum += frame_count;
@@ -1066,4 +1077,150 @@ pub fn parse_show(bytes: &[u8]) -> Vec<(String, Clip)> {
     assert!(r.done(), "show table trailing bytes");
     assert_eq!(sum, total, "the header counts every clip's frames");
     clips
+}
+
+// ---------------------------------------------------------------- §11
+
+/// §11: the database's nodes and each node's segments.
+pub struct Pattern {
+    pub nodes: Vec<PatternNode>,
+}
+
+/// A node: its channels, patterns, segments `(start, pattern)`.
+pub type PatternNode = (Vec<usize>, Vec<PatternRecord>, Vec<(u32, usize)>);
+
+/// §11.3: a pattern of `len` samples; per channel `(shift, width, base)`
+/// and the codes `[sample][channel]`.
+pub struct PatternRecord {
+    pub len: u32,
+    pub heads: Vec<(u32, usize, i32)>,
+    pub codes: Vec<Vec<u32>>,
+}
+
+impl Pattern {
+    /// §11.1–§11.3; `model` is the shared database of a SHARED section.
+    pub fn parse(section: &[u8], model: Option<&[u8]>, channels: usize) -> Pattern {
+        let mut r = Reader::new(section);
+        let flags = r.u8();
+        assert_eq!(flags & !1, 0, "reserved flags");
+        let mut db_reader;
+        let db = if flags & 1 == 1 {
+            db_reader = Reader::new(model.expect("a shared database"));
+            &mut db_reader
+        } else {
+            &mut r
+        };
+        let u16 = |r: &mut Reader<'_>| u16::from_le_bytes([r.u8(), r.u8()]);
+        let u32 = |r: &mut Reader<'_>| u32::from_le_bytes([r.u8(), r.u8(), r.u8(), r.u8()]);
+        let n = u16(db) as usize;
+        assert!((1..=255).contains(&n), "node count");
+        let mut nodes = Vec::new();
+        let mut seen = vec![0; channels];
+        for _ in 0..n {
+            let (c, p, d) = (u16(db) as usize, u16(db) as usize, u32(db) as usize);
+            let list: Vec<usize> = (0..c).map(|_| u16(db) as usize).collect();
+            assert!(list.windows(2).all(|w| w[0] < w[1]), "channels increase");
+            for &ch in &list {
+                seen[ch] += 1;
+            }
+            let offsets: Vec<usize> = (0..p).map(|_| u32(db) as usize).collect();
+            let data = db.take(d);
+            let records = offsets
+                .iter()
+                .map(|&o| {
+                    let mut q = Reader::new(&data[o..]);
+                    let len = u32::from(u16(&mut q));
+                    let row = u16(&mut q) as usize;
+                    let heads: Vec<u8> = (0..c).map(|_| q.u8()).collect();
+                    let bases: Vec<i32> = (0..c).map(|_| u32(&mut q) as i32).collect();
+                    let heads: Vec<(u32, usize, i32)> = heads
+                        .iter()
+                        .zip(&bases)
+                        .map(|(&h, &b)| {
+                            assert_eq!(h & 0x80, 0, "head bit 7");
+                            (u32::from(h & 31), [0, 1, 2, 4][usize::from(h >> 5)], b)
+                        })
+                        .collect();
+                    assert_eq!(row, heads.iter().map(|h| h.1).sum::<usize>(), "row bytes");
+                    let codes = (0..len)
+                        .map(|_| {
+                            heads
+                                .iter()
+                                .map(|&(_, w, _)| {
+                                    let mut v = 0u32;
+                                    for i in 0..w {
+                                        v |= u32::from(q.u8()) << (8 * i);
+                                    }
+                                    v
+                                })
+                                .collect()
+                        })
+                        .collect();
+                    PatternRecord { len, heads, codes }
+                })
+                .collect();
+            nodes.push((list, records, Vec::new()));
+        }
+        assert!(seen.iter().all(|&k| k == 1), "every channel in one node");
+        for node in &mut nodes {
+            let s = u16(&mut r);
+            node.2 = (0..s)
+                .map(|_| (u32(&mut r), u16(&mut r) as usize))
+                .collect();
+            assert_eq!(node.2[0].0, 0, "first segment at 0");
+        }
+        assert!(r.done(), "bytes after the segment lists");
+        Pattern { nodes }
+    }
+
+    /// §11.4: frame `f` of a clip of `frames` frames.
+    pub fn frame(&self, f: u32, frames: u32, channels: usize) -> Vec<i32> {
+        let mut out = vec![0; channels];
+        for (list, records, segments) in &self.nodes {
+            let i = segments.iter().rposition(|s| s.0 <= f).unwrap();
+            let start = segments[i].0;
+            let end = segments.get(i + 1).map_or(frames, |s| s.0);
+            let p = &records[segments[i].1];
+            let (n, l, t) = (end - start, p.len, f - start);
+            let (j, frac) = if n <= 1 || l <= 1 {
+                (0, 0)
+            } else {
+                let (q, d) = (t * (l - 1), n - 1);
+                (q / d, ((q % d) << 16) / d)
+            };
+            for (c, &ch) in list.iter().enumerate() {
+                let (s, _, base) = p.heads[c];
+                let code = |k: u32| i64::from(p.codes[k as usize][c]);
+                out[ch] = if frac == 0 {
+                    base.wrapping_add((code(j) as u32).wrapping_shl(s) as i32)
+                } else {
+                    let u = ((frac >> 4) & 0xFFF) as i64;
+                    let u2 = (u * u) >> 12;
+                    let u3 = (u2 * u) >> 12;
+                    let mut w = [
+                        (2 * u2 - u3 - u) >> 1,
+                        0,
+                        (4 * u2 - 3 * u3 + u) >> 1,
+                        (u3 - u2) >> 1,
+                    ];
+                    w[1] = 4096 - w[0] - w[2] - w[3];
+                    if j == 0 {
+                        w[1] += 2 * w[0];
+                        w[2] -= w[0];
+                        w[0] = 0;
+                    }
+                    if j + 1 == l - 1 {
+                        w[2] += 2 * w[3];
+                        w[1] -= w[3];
+                        w[3] = 0;
+                    }
+                    let tap = |k: i64| code((j as i64 + k).clamp(0, i64::from(l) - 1) as u32);
+                    let acc: i64 = (0..4).map(|k| w[k as usize] * tap(k - 1)).sum();
+                    let v = ((acc + 2048) >> 12) as i32;
+                    base.wrapping_add(v.wrapping_shl(s))
+                };
+            }
+        }
+        out
+    }
 }

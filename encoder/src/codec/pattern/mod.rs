@@ -1,0 +1,316 @@
+//! The `pattern` codec (SPEC.md §11): motion pattern indexing after Gu,
+//! Peng & Deng (CGF 2008; METHODS.md §4).
+//!
+//! 1. **Hierarchy**: the channels are split into body-part nodes — the
+//!    root's translations and heading alone, then one node per limb (the
+//!    `pca-spline` codec's groups, [`crate::codec::pca_spline::pca_groups`]:
+//!    chains of joints between branchings from the skeleton's topology, so
+//!    any rig works). A node's rotation channels are the joints' local
+//!    rotations, relative to the parent joint by construction.
+//! 2. **Segmentation** per node ([`segment`], Algorithm 1), weighted by the
+//!    inverse of each channel's tolerance (tighter joints cut sooner).
+//! 3. **Patterns** per node ([`cluster`]): time normalisation to the mean
+//!    segment length, adaptive k-means growing K until every segment is
+//!    within the threshold, then each group's pattern at the fewest samples
+//!    that play all its members within tolerance; each segment is a
+//!    (pattern, length) pair.
+//!
+//! Every segment is within [`Accept`] of its pattern by construction (the
+//! encoder plays every segment exactly as the decoder does); the search
+//! around it proves the bound by decoding.
+
+pub mod cluster;
+pub mod segment;
+
+use mocap_decoder::consts;
+
+use super::CodecError;
+pub use cluster::Accept;
+use cluster::{NodeInput, NodePatterns, Pattern};
+use segment::SegmentParams;
+
+/// The body-part hierarchy's nodes: the `pca-spline` codec's limb groups
+/// (chains of joints between branchings, from the topology), with the
+/// root's channels that group keeps alone (translations, heading) joined
+/// into one root node: a node costs a segment search per frame, so a node
+/// of one channel is the dearest per channel.
+pub fn nodes(m: &crate::motion::Motion) -> Vec<Vec<usize>> {
+    let joint_of = m.skeleton.channel_joints();
+    let is_root = |c: usize| m.skeleton.joints[joint_of[c]].parent.is_none();
+    let mut root = Vec::new();
+    let mut out = Vec::new();
+    for g in crate::codec::pca_spline::pca_groups(m, 9) {
+        if g.len() == 1 && is_root(g[0]) {
+            root.extend(g);
+        } else {
+            out.push(g);
+        }
+    }
+    if !root.is_empty() {
+        out.insert(0, root);
+    }
+    out
+}
+
+/// How close a segment must be to its pattern under `bound`: strict under
+/// an angle bound (every value within its tolerance), relaxed under a
+/// bound on joint positions alone ([`Accept::POSITIONAL`]).
+pub fn accept_for(bound: &crate::encode::Bound) -> Accept {
+    if bound.angle_deg.is_some() {
+        Accept::STRICT
+    } else {
+        Accept::POSITIONAL
+    }
+}
+
+/// A coded clip: the section and what the decoder will play.
+#[derive(Clone, Debug)]
+pub struct Encoded {
+    /// The codec section (§11.1), its database inside.
+    pub section: Vec<u8>,
+    /// The decoded values, `[channel][frame]`.
+    pub decoded: Vec<Vec<i32>>,
+}
+
+/// Several takes coded with one database (a show's clips, §9.2).
+#[derive(Clone, Debug)]
+pub struct Shared {
+    /// The database (§11.2): the payload of a shared model section.
+    pub database: Vec<u8>,
+    /// Per take, its codec section (§11.1, flag `SHARED`).
+    pub sections: Vec<Vec<u8>>,
+    /// Per take, the decoded values, `[channel][frame]`.
+    pub decoded: Vec<Vec<Vec<i32>>>,
+}
+
+/// Codes `values` (`[channel][frame]`) at tolerances `tol` per channel
+/// (each segment within `accept` of its pattern), with the channels split
+/// into `nodes`, at `fps` frames per second; the database in the section.
+pub fn encode(
+    values: &[Vec<i32>],
+    tol: &[i64],
+    accept: Accept,
+    nodes: &[Vec<usize>],
+    fps: f64,
+) -> Result<Encoded, CodecError> {
+    let mut shared = encode_shared(&[values], tol, accept, nodes, fps)?;
+    let segments = shared.sections.pop().unwrap_or_default();
+    let mut section = vec![0u8];
+    section.extend(shared.database);
+    section.extend(&segments[1..]);
+    Ok(Encoded {
+        section,
+        decoded: shared.decoded.pop().unwrap_or_default(),
+    })
+}
+
+/// Codes several takes of the same channels (`[take][channel][frame]`)
+/// with one database: each node's segments of every take are clustered
+/// together, so a movement repeated in another take costs a reference.
+pub fn encode_shared(
+    takes: &[&[Vec<i32>]],
+    tol: &[i64],
+    accept: Accept,
+    nodes: &[Vec<usize>],
+    fps: f64,
+) -> Result<Shared, CodecError> {
+    let lengths: Vec<usize> = takes
+        .iter()
+        .map(|t| t.first().map_or(0, Vec::len))
+        .collect();
+    if takes.is_empty() || lengths.contains(&0) {
+        return Err(CodecError::NoFrames);
+    }
+    if nodes.is_empty() || nodes.len() > mocap_decoder::pattern::MAX_NODES {
+        return Err(CodecError::PatternNodes(nodes.len()));
+    }
+    let channels = takes[0].len();
+    // The takes end to end; no segment crosses from one to the next.
+    let joined: Vec<Vec<i32>> = (0..channels)
+        .map(|c| takes.iter().flat_map(|t| t[c].iter().copied()).collect())
+        .collect();
+    let firsts: Vec<usize> = lengths
+        .iter()
+        .scan(0, |at, &n| {
+            let first = *at;
+            *at += n;
+            Some(first)
+        })
+        .collect();
+    let params = SegmentParams::at_rate(fps);
+    let mut decoded = vec![vec![Vec::new(); channels]; takes.len()];
+    let mut database = (nodes.len() as u16).to_le_bytes().to_vec();
+    let mut sections: Vec<Vec<u8>> = vec![vec![mocap_decoder::pattern::FLAG_SHARED]; takes.len()];
+    for channels in nodes {
+        let mut channels = channels.clone();
+        channels.sort_unstable();
+        let input = NodeInput {
+            values: channels.iter().map(|&c| joined[c].as_slice()).collect(),
+            tol: channels.iter().map(|&c| tol[c].max(0)).collect(),
+            accept,
+        };
+        // Segments of each take (Algorithm 1 on the take alone).
+        let mut spans = Vec::new();
+        let mut per_take = Vec::new();
+        for (&first, &n) in firsts.iter().zip(&lengths) {
+            let scaled: Vec<Vec<f64>> = input
+                .values
+                .iter()
+                .zip(&input.tol)
+                .map(|(x, &t)| {
+                    let k = 1.0 / t.max(1) as f64;
+                    x[first..first + n]
+                        .iter()
+                        .map(|&v| f64::from(v) * k)
+                        .collect()
+                })
+                .collect();
+            let starts = segment::segment(&scaled, n, &params);
+            per_take.push((spans.len(), starts.len()));
+            for (i, &a) in starts.iter().enumerate() {
+                let end = starts.get(i + 1).copied().unwrap_or(n);
+                spans.push((first + a, end - a));
+            }
+        }
+        let np = cluster::patterns(&input, &spans);
+        let most = per_take.iter().map(|p| p.1).max().unwrap_or(0);
+        if most > usize::from(u16::MAX) || np.patterns.len() > usize::from(u16::MAX) {
+            return Err(CodecError::PatternTooMany {
+                segments: most,
+                patterns: np.patterns.len(),
+            });
+        }
+        write_node(&mut database, &channels, &np);
+        for (take, &(from, count)) in per_take.iter().enumerate() {
+            let first = firsts[take];
+            let section = &mut sections[take];
+            section.extend((count as u16).to_le_bytes());
+            for (&(a, _), &p) in spans[from..from + count]
+                .iter()
+                .zip(&np.of_segment[from..from + count])
+            {
+                section.extend(((a - first) as u32).to_le_bytes());
+                section.extend((p as u16).to_le_bytes());
+            }
+            for (i, &c) in channels.iter().enumerate() {
+                decoded[take][c] = (from..from + count)
+                    .flat_map(|s| {
+                        let (_, n) = spans[s];
+                        let p = &np.patterns[np.of_segment[s]];
+                        (0..n).map(move |t| p.play(i, t, n))
+                    })
+                    .collect();
+            }
+        }
+    }
+    Ok(Shared {
+        database,
+        sections,
+        decoded,
+    })
+}
+
+/// Appends a database node record (§11.2).
+fn write_node(out: &mut Vec<u8>, channels: &[usize], np: &NodePatterns) {
+    let records: Vec<Vec<u8>> = np.patterns.iter().map(Pattern::record).collect();
+    let data_len: usize = records.iter().map(Vec::len).sum();
+    out.extend((channels.len() as u16).to_le_bytes());
+    out.extend((np.patterns.len() as u16).to_le_bytes());
+    out.extend((data_len as u32).to_le_bytes());
+    for &c in channels {
+        out.extend((c as u16).to_le_bytes());
+    }
+    let mut at = 0u32;
+    for r in &records {
+        out.extend(at.to_le_bytes());
+        at += r.len() as u32;
+    }
+    for r in records {
+        out.extend(r);
+    }
+}
+
+/// What `mocap info` shows of a `pattern` section.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SectionInfo {
+    /// Per node: channels, segments, patterns, pattern samples (all
+    /// channels), bytes of its database record.
+    pub nodes: Vec<[usize; 5]>,
+    /// Bytes of the database.
+    pub database_len: usize,
+}
+
+/// Reads the sizes of a `pattern` section (`None` if it does not parse,
+/// or its database is a shared model section: see [`inspect_database`]).
+pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
+    if *section.first()? != 0 {
+        return None;
+    }
+    let mut info = inspect_database(&section[1..])?;
+    let mut at = 1 + info.database_len;
+    for node in &mut info.nodes {
+        let n = usize::from(u16::from_le_bytes(
+            section.get(at..at + 2)?.try_into().ok()?,
+        ));
+        node[1] = n;
+        at += 2 + n * 6;
+    }
+    (at == section.len()).then_some(info)
+}
+
+/// Reads the sizes of a pattern database (§11.2): a shared model section,
+/// or the start of a section's bytes after its flags.
+pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
+    let u16_at = |at: usize| -> Option<usize> {
+        Some(usize::from(u16::from_le_bytes(
+            db.get(at..at + 2)?.try_into().ok()?,
+        )))
+    };
+    let u32_at = |at: usize| -> Option<usize> {
+        Some(u32::from_le_bytes(db.get(at..at + 4)?.try_into().ok()?) as usize)
+    };
+    let n = u16_at(0)?;
+    let mut at = 2;
+    let mut nodes = Vec::new();
+    for _ in 0..n {
+        let (nc, patterns, data) = (u16_at(at)?, u16_at(at + 2)?, u32_at(at + 4)?);
+        let offsets = at + 8 + nc * 2;
+        let data_at = offsets + patterns * 4;
+        let mut samples = 0;
+        for p in 0..patterns {
+            samples += u16_at(data_at + u32_at(offsets + p * 4)?)? * nc;
+        }
+        let end = data_at + data;
+        nodes.push([nc, 0, patterns, samples, end - at]);
+        at = end;
+    }
+    Some(SectionInfo {
+        nodes,
+        database_len: at,
+    })
+}
+
+impl SectionInfo {
+    /// The lines `mocap info` prints.
+    pub fn describe(&self) -> String {
+        let sum = |i: usize| self.nodes.iter().map(|n| n[i]).sum::<usize>();
+        let mut s = format!(
+            "  nodes: {}, segments: {}, patterns: {}, pattern samples: {}, database {} B\n",
+            self.nodes.len(),
+            sum(1),
+            sum(2),
+            sum(3),
+            self.database_len
+        );
+        for (i, n) in self.nodes.iter().enumerate() {
+            s += &format!(
+                "  node {i}: {} channels, {} segments, {} patterns, {} samples, {} B\n",
+                n[0], n[1], n[2], n[3], n[4]
+            );
+        }
+        s
+    }
+}
+
+/// The section id.
+pub const SECTION_ID: u8 = consts::SECTION_CODEC_PATTERN;
