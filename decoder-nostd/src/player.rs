@@ -124,9 +124,27 @@ impl<'a, const N: usize> Player<'a, N> {
     }
 
     /// Codecs that evaluate any time directly (no frame history) decode
-    /// the pose at `pos` (frames, 16.16) into `out` and return true.
+    /// the pose at `pos` (frames, 16.16) into `out` and return true
+    /// (`pattern`: its frames directly, between two frames §6's mix).
     fn pose_at(&mut self, pos: u64, out: &mut [i32]) -> Result<bool, Error> {
         match &self.codec {
+            #[cfg(feature = "codec-pattern")]
+            Codec::Pattern(c) => {
+                let f = u32::try_from(pos >> 16).unwrap_or(u32::MAX);
+                let frac = (pos & 0xffff) as u32;
+                let next = self.state.get_mut(..self.channels).unwrap_or(&mut []);
+                let ok = c.decode_frame(f, out).is_some()
+                    && (frac == 0 || c.decode_frame(f.wrapping_add(1), next).is_some());
+                if !ok {
+                    return Err(Error::PlayerInvariant { frame: f });
+                }
+                if frac != 0 {
+                    for (o, &b) in out.iter_mut().zip(next.iter()) {
+                        *o = mix(*o, b, frac);
+                    }
+                }
+                Ok(true)
+            }
             #[cfg(feature = "codec-pca-spline")]
             Codec::PcaSpline(c) => c
                 .decode_at(pos, &mut self.segment, out, &mut self.state)
@@ -270,8 +288,6 @@ fn decode(codec: &Codec<'_>, f: u32, values: &mut [i32]) -> Option<()> {
         Codec::IndexFast(c) => c.decode_frame(f, values),
         #[cfg(feature = "codec-predictive")]
         Codec::Predictive(c) => c.decode_frame(f, values),
-        #[cfg(feature = "codec-pattern")]
-        Codec::Pattern(c) => c.decode_frame(f, values),
         _ => {
             let _ = (f, values);
             Some(())

@@ -43,6 +43,9 @@ pub enum BenchCodecArg {
     PcaSpline,
     /// Prediction from the last two values, residuals range-coded (SPEC.md §5b).
     Predictive,
+    /// Motion pattern indexing (SPEC.md §11); each file alone (shows:
+    /// `report/examples/pattern_db.rs`).
+    Pattern,
     /// Every codec; keep the smallest clip that meets the bound.
     Auto,
     /// Baseline: every channel of every frame as 16 bits at a step fitting
@@ -66,6 +69,7 @@ impl From<BenchCodecArg> for Method {
             BenchCodecArg::Index => Method::Codec(CodecChoice::Index),
             BenchCodecArg::PcaSpline => Method::Codec(CodecChoice::PcaSpline),
             BenchCodecArg::Predictive => Method::Codec(CodecChoice::Predictive),
+            BenchCodecArg::Pattern => Method::Codec(CodecChoice::Pattern),
             BenchCodecArg::Auto => Method::Codec(CodecChoice::Auto),
             BenchCodecArg::Raw16 => Method::Baseline(Baseline::Raw16),
             BenchCodecArg::Zstd => Method::Baseline(Baseline::QuantZstd),

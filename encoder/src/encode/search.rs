@@ -280,12 +280,17 @@ pub(super) fn encode_by_tolerance(
     })
 }
 
+/// Under a bound on ARMS alone, the position budget's bisection starts at
+/// this many times the ARMS.
+const ARMS_BUDGET_SCALE: f64 = 8.0;
+
 /// The search of every coder driven by per-channel tolerances: `run` codes
 /// the motion at the tolerances it is given (from
 /// [`Reference::tolerances`]) and measures its decoded motion. Under an
 /// angle bound (no millimetre bound) the tolerances are tightened by 0.8
-/// until the bound holds (at most 8 tries); under a millimetre bound the
-/// position budget per channel is log-bisected (errors of every joint up
+/// until the bound holds (at most 8 tries); under a millimetre bound (a
+/// joint's largest error, or ARMS alone) the position budget per channel is
+/// log-bisected (errors of every joint up
 /// the chain add up, so the budget per channel is a fraction of the bound)
 /// and the smallest try that holds is kept. Returns it and the tries made;
 /// [`EncodeError::BoundNotMetAfter`] or [`EncodeError::BoundNotMet`] when
@@ -309,7 +314,13 @@ pub(super) fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
     let mut attempts = 0;
     let mut tighten = 1.0;
     let mut run = |s_um: Option<f64>, tighten: f64| run(&input.tolerances(bound, s_um, tighten));
-    let best = match bound.position_mm {
+    // Under an ARMS bound alone the position budget is bisected too, up to
+    // eight times the ARMS (the largest error of a joint is a few times the
+    // mean).
+    let position = bound
+        .position_mm
+        .or(bound.arms_mm.map(|a| a * ARMS_BUDGET_SCALE));
+    let best = match position {
         None => loop {
             attempts += 1;
             round(attempts, attempts);
@@ -354,4 +365,35 @@ pub(super) fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
         }
     };
     Ok((best, attempts))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::encode::{encode, Bound, BoundSpec, CodecChoice, EncodeOptions};
+    use crate::generate::animatronic_demo;
+
+    /// A bound on ARMS alone is met by every codec driven by tolerances
+    /// (it used to fail after eight tightening rounds: no budget bounded
+    /// the rotations).
+    #[test]
+    fn an_arms_bound_alone_is_met() {
+        let m = animatronic_demo();
+        let bound = Bound::from_specs(&["arms:5mm".parse::<BoundSpec>().unwrap()]);
+        for codec in [
+            CodecChoice::Index,
+            CodecChoice::Predictive,
+            CodecChoice::Pattern,
+        ] {
+            let opts = EncodeOptions {
+                codec,
+                bound,
+                metres_per_unit: crate::units::detect(&m).metres(),
+                key_interval: None,
+                index_layout: Default::default(),
+            };
+            let e = encode(&m, &opts).unwrap_or_else(|e| panic!("{codec:?}: {e}"));
+            assert!(e.metrics.arms_mm <= 5.0, "{codec:?}");
+            assert!(e.metrics.arms_mm > 1.0, "{codec:?}: the budget is used");
+        }
+    }
 }

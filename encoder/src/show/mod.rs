@@ -146,8 +146,11 @@ pub struct BuiltClip {
     pub codec: CodecChoice,
     /// Coded frames.
     pub frames: u32,
-    /// Bytes of the clip as a single `.mcb` file.
+    /// Bytes of the clip as a single `.mcb` file (a clip that shares a
+    /// pattern database: with the whole database in its section).
     pub single_bytes: usize,
+    /// It reads a pattern database shared with other clips (§11.2).
+    pub shares_database: bool,
     /// Bytes of its codec section in the show.
     pub codec_bytes: usize,
     /// The bound's proof, as `mocap encode` prints it.
@@ -657,13 +660,15 @@ fn assemble_show(
         .zip(rows)
         .zip(seams)
         .zip(&codecs)
-        .map(|((((c, s), row), seam), codec)| BuiltClip {
+        .zip(in_show)
+        .map(|(((((c, s), row), seam), codec), shared)| BuiltClip {
             name: c.name.clone(),
             source: c.file.clone(),
             source_frames: s.range,
             codec: s.codec,
             frames: row.frames,
             single_bytes: s.bytes.len(),
+            shares_database: shared.is_some(),
             codec_bytes: codec.1.len(),
             proof: s.proof.clone(),
             looping: row.looping,
@@ -836,6 +841,12 @@ pub fn report(output: &Path, spec: &ShowSpec, built: &BuiltShow) -> String {
         (built.bytes.len() as f64 / singles.max(1) as f64 - 1.0) * 100.0,
         shared.join(", ")
     );
+    if built.clips.iter().any(|c| c.shares_database) {
+        let _ = writeln!(
+            s,
+            "  (the `pattern` clips read one database: as single files each would carry all of it)"
+        );
+    }
     for c in &built.clips {
         let looping = match (c.looping, c.seam) {
             (Some(l), Some(k)) => format!(

@@ -3,6 +3,7 @@
 //! plotters, SVG or PNG by the file's extension; text uses the font bundled
 //! by [`style::register_font`] (no system font library).
 
+pub mod database;
 pub mod rma;
 pub mod style;
 
@@ -199,11 +200,15 @@ pub fn rate_distortion_plot(path: &Path, rows: &[Row]) -> Result<(), PlotError> 
 
 /// The distinct values of `key` over `rows`, in the order they first appear.
 fn first_seen(rows: &[Row], key: fn(&Row) -> &str) -> Vec<&str> {
+    distinct(rows.iter().map(key))
+}
+
+/// The distinct items, in the order they first appear.
+pub(crate) fn distinct<'a>(items: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
     let mut out: Vec<&str> = Vec::new();
-    for r in rows {
-        let k = key(r);
-        if !out.contains(&k) {
-            out.push(k);
+    for i in items {
+        if !out.contains(&i) {
+            out.push(i);
         }
     }
     out
