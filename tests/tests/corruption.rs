@@ -151,3 +151,21 @@ fn predictive_mutants_never_panic() {
     let (ok, err) = hammer("35_17 predictive", &clip, 3000, 0xD1CE);
     eprintln!("35_17 predictive: {ok} decoded, {err} rejected");
 }
+
+#[test]
+fn pattern_mutants_never_panic() {
+    let m = generate::animatronic_demo();
+    for bound in ["0.5deg", "50mm"] {
+        let clip = encode_with(&m, CodecChoice::Pattern, bound, None);
+        let (ok, err) = hammer("demo pattern", &clip, 3000, 0x7A77 ^ bound.len() as u64);
+        eprintln!("demo pattern {bound}: {ok} decoded, {err} rejected");
+        assert!(err > 0);
+    }
+    let Some(file) = corpus_file("cmu", "35_17.bvh") else {
+        return;
+    };
+    let m = bvh::read_file(&file).unwrap();
+    let clip = encode_with(&m, CodecChoice::Pattern, "50mm", None);
+    let (ok, err) = hammer("35_17 pattern", &clip, 3000, 0x5A77);
+    eprintln!("35_17 pattern: {ok} decoded, {err} rejected");
+}
