@@ -15,7 +15,8 @@ use core::num::NonZeroU32;
 /// words (`3 + n` if `k = 0`), then one word per constant channel; with
 /// less room the same values are decoded, more slowly — or the
 /// `predictive` codec's two frames, contexts, probabilities and coder
-/// (`3·C + 19` words; a smaller `N` is refused) — so
+/// (`3·C + 19` words; a smaller `N` is refused), or the `pattern` codec's
+/// second frame while `sample_at` mixes two (it keeps no other state) — so
 /// `size_of::<Player<N>>()` is `4·N + 176` bytes on a 32-bit MCU
 /// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
