@@ -149,18 +149,13 @@ pub fn taps(j: u32, len: u32, frac: u32) -> ([u32; 4], [i32; 4]) {
         w2 = w2.wrapping_sub(w0);
         w0 = 0;
     }
-    if j.wrapping_add(1) >= last {
-        if j.wrapping_add(1) == last {
-            // p[len] = 2·p[last] − p[last − 1]: tap 3 is past the end.
-            w2 = w2.wrapping_add(w3.wrapping_mul(2));
-            w1 = w1.wrapping_sub(w3);
-        } else {
-            // j = last: the curve is at the last sample (frac is 0).
-            w1 = w1.wrapping_add(w2).wrapping_add(w3);
-            w2 = 0;
-        }
+    if j.wrapping_add(1) == last {
+        // p[len] = 2·p[last] − p[last − 1]: tap 3 is past the end.
+        w2 = w2.wrapping_add(w3.wrapping_mul(2));
+        w1 = w1.wrapping_sub(w3);
         w3 = 0;
     }
+    // At j = last (frac 0 there) taps 2 and 3 clamp onto tap 1.
     let t = [
         j.saturating_sub(1),
         j,
@@ -232,15 +227,23 @@ impl<'a> PatternCodec<'a> {
         if flags & !FLAG_SHARED != 0 {
             return Err(malformed("reserved flags set"));
         }
-        let (db, segments) = if flags & FLAG_SHARED != 0 {
-            let db = model.ok_or(malformed("a shared database but no model section"))?;
-            (db, rest)
+        let shared = flags & FLAG_SHARED != 0;
+        let db = if shared {
+            model.ok_or(malformed("a shared database but no model section"))?
         } else {
-            let len = database_len(rest).ok_or(malformed("database truncated"))?;
-            rest.split_at_checked(len)
-                .ok_or(malformed("database truncated"))?
+            rest
         };
-        let (node_count, nodes) = check_database(db, channels)?;
+        let (node_count, nodes, len) = check_database(db, channels)?;
+        // A model section is the database alone; in the codec section the
+        // segment lists follow it.
+        let segments = if shared {
+            if len != db.len() {
+                return Err(malformed("bytes after the database's last node"));
+            }
+            rest
+        } else {
+            rest.get(len..).unwrap_or(&[])
+        };
         let mut r = Reader::new(nodes);
         let mut s = Reader::new(segments);
         for _ in 0..node_count {
@@ -353,11 +356,7 @@ impl Samples<'_> {
                 1 if CURVE => {
                     let c = |r: &[u8]| r.get(at).map(|&b| i32::from(b));
                     // |Σ w·c| < 5 120 · 2^8: exact in 32 bits.
-                    let acc = w[0]
-                        .wrapping_mul(c(r0)?)
-                        .wrapping_add(w[1].wrapping_mul(c(r1)?))
-                        .wrapping_add(w[2].wrapping_mul(c(r2)?))
-                        .wrapping_add(w[3].wrapping_mul(c(r3)?));
+                    let acc = weigh(w, [c(r0)?, c(r1)?, c(r2)?, c(r3)?]);
                     at = at.wrapping_add(1);
                     curve(*base, shift, acc)
                 }
@@ -369,11 +368,7 @@ impl Samples<'_> {
                 2 if CURVE => {
                     let c = |r: &[u8]| u16_at(r, at).map(i32::from);
                     // |Σ w·c| < 5 120 · 2^16: exact in 32 bits.
-                    let acc = w[0]
-                        .wrapping_mul(c(r0)?)
-                        .wrapping_add(w[1].wrapping_mul(c(r1)?))
-                        .wrapping_add(w[2].wrapping_mul(c(r2)?))
-                        .wrapping_add(w[3].wrapping_mul(c(r3)?));
+                    let acc = weigh(w, [c(r0)?, c(r1)?, c(r2)?, c(r3)?]);
                     at = at.wrapping_add(2);
                     curve(*base, shift, acc)
                 }
@@ -418,6 +413,15 @@ fn sample(base: [u8; 4], shift: u8, code: u32) -> i32 {
     i32::from_le_bytes(base).wrapping_add(code.wrapping_shl(u32::from(shift)) as i32)
 }
 
+/// `Σ w·c` of four codes in 32-bit arithmetic (exact for codes below 2^16).
+#[inline(always)]
+fn weigh(w: [i32; 4], c: [i32; 4]) -> i32 {
+    w[0].wrapping_mul(c[0])
+        .wrapping_add(w[1].wrapping_mul(c[1]))
+        .wrapping_add(w[2].wrapping_mul(c[2]))
+        .wrapping_add(w[3].wrapping_mul(c[3]))
+}
+
 /// The curve's value from the weighed sum `acc` of four codes (§11.4).
 #[inline(always)]
 fn curve(base: [u8; 4], shift: u8, acc: i32) -> i32 {
@@ -425,40 +429,27 @@ fn curve(base: [u8; 4], shift: u8, acc: i32) -> i32 {
     i32::from_le_bytes(base).wrapping_add(code.wrapping_shl(u32::from(shift)))
 }
 
-/// Bytes of the database at the start of `b` (§11.2), if it is whole.
-fn database_len(b: &[u8]) -> Option<usize> {
-    let mut r = Reader::new(b);
-    let n = r.u16_le()?;
-    for _ in 0..n {
-        read_node(&mut r)?;
-    }
-    Some(r.pos())
-}
-
-/// Validates a database (§11.2–§11.3) for `channels` channels: its node
-/// count and its node records.
-fn check_database(db: &[u8], channels: usize) -> Result<(usize, &[u8]), Error> {
+/// Validates the database at the start of `db` (§11.2–§11.3) for
+/// `channels` channels: its node count, its node records and its length.
+fn check_database(db: &[u8], channels: usize) -> Result<(usize, &[u8], usize), Error> {
     let malformed = |rule| Error::PatternMalformed { rule };
     let mut r = Reader::new(db);
     let node_count = usize::from(r.u16_le().ok_or(malformed("database truncated"))?);
     if node_count == 0 || node_count > MAX_NODES {
         return Err(malformed("node count not in 1..=255"));
     }
-    let nodes = db.get(2..).unwrap_or(&[]);
     let mut total = 0usize;
     for _ in 0..node_count {
         let node = read_node(&mut r).ok_or(malformed("database truncated"))?;
         check_node(&node)?;
         total = total.wrapping_add(node.channel_count());
     }
-    if !r.is_empty() {
-        return Err(malformed("bytes after the database's last node"));
-    }
+    let nodes = db.get(2..r.pos()).unwrap_or(&[]);
     if total != channels {
         return Err(malformed("the nodes' channels are not the header's"));
     }
     check_cover(nodes, node_count, channels)?;
-    Ok((node_count, nodes))
+    Ok((node_count, nodes, r.pos()))
 }
 
 /// The rules of a node's segment list (§11.1).

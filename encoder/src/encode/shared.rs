@@ -29,13 +29,6 @@ pub struct SharedPatterns {
     pub clips: Vec<Encoded>,
 }
 
-impl SharedPatterns {
-    /// Bytes of the database and every segment list.
-    pub fn coded_bytes(&self) -> usize {
-        self.database.len() + self.sections.iter().map(Vec::len).sum::<usize>()
-    }
-}
-
 /// One try: every motion's proof and the shared sections.
 struct Joint {
     database: Vec<u8>,
@@ -93,21 +86,29 @@ pub fn encode_pattern_shared(
     let accept = pattern::accept_for(&opts.bound);
     let run = |tol: &[i64]| -> Result<Joint, EncodeError> {
         let takes: Vec<&[Vec<i32>]> = refs.iter().map(|r| r.fixed.values.as_slice()).collect();
-        let shared = pattern::encode_shared(&takes, tol, accept, &nodes, fps)?;
+        let pattern::Shared {
+            database,
+            sections,
+            decoded,
+        } = pattern::encode_shared(&takes, tol, accept, &nodes, fps)?;
         let mut attempts = Vec::new();
-        for (k, ((m, r), segments)) in motions.iter().zip(&refs).zip(&shared.sections).enumerate() {
-            let mut section = vec![0u8];
-            section.extend(&shared.database);
-            section.extend(&segments[1..]);
+        for (k, (((m, r), segments), values)) in motions
+            .iter()
+            .zip(&refs)
+            .zip(&sections)
+            .zip(decoded)
+            .enumerate()
+        {
             let expected = FixedChannels {
                 kinds: r.fixed.kinds.clone(),
-                values: shared.decoded[k].clone(),
+                values,
             };
             let one = EncodeOptions {
                 codec: CodecChoice::Pattern,
                 metres_per_unit: metres_per_unit[k],
                 ..opts.clone()
             };
+            let section = pattern::with_database(&database, segments);
             let mut a = prove(
                 m,
                 r,
@@ -118,11 +119,11 @@ pub fn encode_pattern_shared(
             a.decoded = Vec::new();
             attempts.push(a);
         }
-        let size = shared.database.len() + shared.sections.iter().map(Vec::len).sum::<usize>();
+        let size = database.len() + sections.iter().map(Vec::len).sum::<usize>();
         let worst = worst(&attempts.iter().map(|a| &a.metrics).collect::<Vec<_>>());
         Ok(Joint {
-            database: shared.database,
-            sections: shared.sections,
+            database,
+            sections,
             attempts,
             worst,
             size,

@@ -123,14 +123,13 @@ fn resample(x: &[i32], a: usize, n: usize, m: usize) -> impl Iterator<Item = f64
 /// The node's patterns for the segments `spans` (first frame, frames) of
 /// its values.
 pub fn patterns(node: &NodeInput<'_>, spans: &[(usize, usize)]) -> NodePatterns {
-    let spans = spans.to_vec();
-    let groups = kmeans(node, &spans);
+    let groups = kmeans(node, spans);
     let mut patterns = Vec::new();
     let mut of_segment = vec![0; spans.len()];
     for members in groups {
         let mut left = members;
         while !left.is_empty() {
-            let (pattern, fits) = fit(node, &spans, &left);
+            let (pattern, fits) = fit(node, spans, &left);
             let id = patterns.len();
             patterns.push(pattern);
             let mut rest = Vec::new();
@@ -145,7 +144,7 @@ pub fn patterns(node: &NodeInput<'_>, spans: &[(usize, usize)]) -> NodePatterns 
             // not fit their group's are tried one by one.
             if rest.len() == left.len() {
                 for s in rest.drain(..) {
-                    let (p, fits) = fit(node, &spans, &[s]);
+                    let (p, fits) = fit(node, spans, &[s]);
                     debug_assert!(fits[0], "a segment must fit its own pattern");
                     of_segment[s] = patterns.len();
                     patterns.push(p);

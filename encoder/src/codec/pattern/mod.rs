@@ -95,13 +95,20 @@ pub fn encode(
 ) -> Result<Encoded, CodecError> {
     let mut shared = encode_shared(&[values], tol, accept, nodes, fps)?;
     let segments = shared.sections.pop().unwrap_or_default();
-    let mut section = vec![0u8];
-    section.extend(shared.database);
-    section.extend(&segments[1..]);
     Ok(Encoded {
-        section,
+        section: with_database(&shared.database, &segments),
         decoded: shared.decoded.pop().unwrap_or_default(),
     })
+}
+
+/// A clip's section with `database` inside (§11.1, flags 0), from its
+/// section `shared` that reads it from a model section (flag `SHARED`):
+/// the same segment lists, the same decoded values.
+pub fn with_database(database: &[u8], shared: &[u8]) -> Vec<u8> {
+    let mut section = vec![0u8];
+    section.extend(database);
+    section.extend(shared.get(1..).unwrap_or(&[]));
+    section
 }
 
 /// Codes several takes of the same channels (`[take][channel][frame]`)

@@ -38,12 +38,14 @@ impl SegmentParams {
 /// are `x` (`[channel][frame]`, tolerance units: each channel divided by
 /// its tolerance), over `frames` frames.
 pub fn segment(x: &[Vec<f64>], frames: usize, p: &SegmentParams) -> Vec<usize> {
-    let change = |t: usize| -> f64 { x.iter().map(|c| (c[t] - c[t - 1]).abs()).sum() };
-    let overall = (1..frames).map(change).sum::<f64>() / (frames.max(2) - 1) as f64;
+    // change[t - 1]: the weighted change into frame t.
+    let change: Vec<f64> = (1..frames)
+        .map(|t| x.iter().map(|c| (c[t] - c[t - 1]).abs()).sum())
+        .collect();
+    let overall = change.iter().sum::<f64>() / (frames.max(2) - 1) as f64;
     let mut starts = vec![0];
     let (mut start, mut sum, mut count) = (0usize, 0.0f64, 0usize);
-    for t in 1..frames {
-        let d = change(t);
+    for (t, &d) in (1..frames).zip(&change) {
         let len = t - start;
         let mean = if count > 0 {
             sum / count as f64
@@ -62,66 +64,6 @@ pub fn segment(x: &[Vec<f64>], frames: usize, p: &SegmentParams) -> Vec<usize> {
     }
     // A last segment shorter than the shortest joins the one before, when
     // the two together are not too long.
-    if starts.len() > 1 {
-        let last = starts[starts.len() - 1];
-        let before = starts[starts.len() - 2];
-        if frames - last < p.min_len && frames - before <= p.max_len {
-            starts.pop();
-        }
-    }
-    starts
-}
-
-/// Cuts at the quiet moments: the local minima of the node's weighted
-/// speed (smoothed over `window` frames), no two closer than `min_len`
-/// and none further apart than `max_len`, plus the discontinuities. In a
-/// repeated movement the minima fall at the same phase of every cycle, so
-/// the segments of one cycle look alike and share a pattern.
-pub fn segment_at_rest(
-    x: &[Vec<f64>],
-    frames: usize,
-    p: &SegmentParams,
-    window: usize,
-) -> Vec<usize> {
-    if frames < 2 {
-        return vec![0];
-    }
-    let change: Vec<f64> = (0..frames)
-        .map(|t| {
-            if t == 0 {
-                0.0
-            } else {
-                x.iter().map(|c| (c[t] - c[t - 1]).abs()).sum()
-            }
-        })
-        .collect();
-    let overall = change.iter().sum::<f64>() / (frames - 1) as f64;
-    let half = window / 2;
-    let speed: Vec<f64> = (0..frames)
-        .map(|t| {
-            let (a, b) = (t.saturating_sub(half), (t + half + 1).min(frames));
-            change[a..b].iter().sum::<f64>() / (b - a) as f64
-        })
-        .collect();
-    let mut starts = vec![0];
-    let mut t = 1;
-    while t < frames {
-        let last = *starts.last().unwrap_or(&0);
-        if overall > 0.0 && change[t] > p.jump * overall {
-            starts.push(t);
-            t += 1;
-            continue;
-        }
-        let len = t - last;
-        let minimum = t + 1 < frames
-            && speed[t] <= speed[t - 1]
-            && speed[t] < speed[t + 1]
-            && len >= p.min_len;
-        if minimum || len >= p.max_len {
-            starts.push(t);
-        }
-        t += 1;
-    }
     if starts.len() > 1 {
         let last = starts[starts.len() - 1];
         let before = starts[starts.len() - 2];
