@@ -291,6 +291,15 @@ fn golden_predictive_clip() {
     );
 }
 
+/// `pattern` (SPEC.md §11): the demo at 20 mm, its database in the section.
+#[test]
+fn golden_pattern_clip() {
+    check_case(
+        "pattern_demo_20mm",
+        &motion_clip(&demo(), CodecChoice::Pattern, &["20mm"]),
+    );
+}
+
 #[test]
 fn golden_servo_clips() {
     let m = demo();
@@ -357,6 +366,10 @@ fn golden_corpus_digests() {
         (
             "cmu/35_01 pca-spline 50mm+arms:10mm",
             motion_clip(&walk, CodecChoice::PcaSpline, &["50mm", "arms:10mm"]),
+        ),
+        (
+            "cmu/35_01 pattern 50mm+arms:10mm",
+            motion_clip(&walk, CodecChoice::Pattern, &["50mm", "arms:10mm"]),
         ),
         (
             "cmu/35_01 predictive 1deg",
