@@ -86,7 +86,8 @@ pub mod pca_spline_cache {
 #[cfg(feature = "codec-pattern")]
 pub mod pattern {
     pub use crate::codec::pattern::{
-        interpolate, position, taps, weights, FLAG_SHARED, MAX_NODES, MAX_SEGMENT,
+        interpolate, position, taps, weights, window, FLAG_SHARED, HEAD_WIDE_BASE, LAYOUT_COLUMNS,
+        LAYOUT_ROWS, MAX_NODES, MAX_SEGMENT,
     };
 }
 

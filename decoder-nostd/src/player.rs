@@ -16,7 +16,9 @@ use core::num::NonZeroU32;
 /// less room the same values are decoded, more slowly — or the
 /// `predictive` codec's two frames, contexts, probabilities and coder
 /// (`3·C + 19` words; a smaller `N` is refused), or the `pattern` codec's
-/// second frame while `sample_at` mixes two (it keeps no other state) — so
+/// second frame while `sample_at` mixes two (`C` words), then 4 words per
+/// node, its last segment (with less room the nodes past it search their
+/// segment lists) — so
 /// `size_of::<Player<N>>()` is `4·N + 176` bytes on a 32-bit MCU
 /// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
@@ -133,9 +135,14 @@ impl<'a, const N: usize> Player<'a, N> {
             Codec::Pattern(c) => {
                 let f = u32::try_from(pos >> 16).unwrap_or(u32::MAX);
                 let frac = (pos & 0xffff) as u32;
-                let next = self.state.get_mut(..self.channels).unwrap_or(&mut []);
-                let ok = c.decode_frame(f, out).is_some()
-                    && (frac == 0 || c.decode_frame(f.wrapping_add(1), next).is_some());
+                // The second frame of `sample_at`, then each node's segment
+                // (§11.4): the next frame needs no search.
+                let (next, cursors) = self
+                    .state
+                    .split_at_mut_checked(self.channels)
+                    .unwrap_or((&mut [], &mut []));
+                let ok = c.decode(f, out, cursors).is_some()
+                    && (frac == 0 || c.decode(f.wrapping_add(1), next, cursors).is_some());
                 if !ok {
                     return Err(Error::PlayerInvariant { frame: f });
                 }

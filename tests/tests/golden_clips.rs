@@ -341,6 +341,24 @@ fn pre_digest_servo_clips_keep_decoding() {
     }
 }
 
+/// A `pattern` clip as the encoder wrote it before layout 1 (SPEC.md §11.2:
+/// a `u16` node count, records in rows, §11.3), kept as committed
+/// (`tests/golden/pre-columns/`): it still decodes to exactly its committed
+/// output.
+#[test]
+fn pre_columns_pattern_clip_keeps_decoding() {
+    let dir = golden_dir().join("pre-columns");
+    let name = "pattern_demo_20mm";
+    let bytes = std::fs::read(dir.join(format!("{name}.mcb"))).unwrap();
+    let expected = std::fs::read_to_string(dir.join(format!("{name}.out"))).unwrap();
+    let actual = decoded_report(&bytes);
+    assert!(
+        expected == actual,
+        "pre-columns {name}: the decoder's output changed:\n{}",
+        diff(&expected, &actual)
+    );
+}
+
 /// Clips encoded from the corpus, pinned by digests of their bytes and of
 /// everything the decoder makes of them.
 #[test]

@@ -1089,12 +1089,14 @@ pub struct Pattern {
 /// A node: its channels, patterns, segments `(start, pattern)`.
 pub type PatternNode = (Vec<usize>, Vec<PatternRecord>, Vec<(u32, usize)>);
 
-/// §11.3: a pattern of `len` samples; per channel `(shift, width, base)`
-/// and the codes `[sample][channel]`.
+/// §11.3 and §11.3b: a pattern of `len` samples; per channel `(shift,
+/// width, base)` and the codes `[sample][channel]`; `steps` in layout 1
+/// (the value is `(base + code) << shift`, not `base + (code << shift)`).
 pub struct PatternRecord {
     pub len: u32,
     pub heads: Vec<(u32, usize, i32)>,
     pub codes: Vec<Vec<u32>>,
+    pub steps: bool,
 }
 
 impl Pattern {
@@ -1112,8 +1114,10 @@ impl Pattern {
         };
         let u16 = |r: &mut Reader<'_>| u16::from_le_bytes([r.u8(), r.u8()]);
         let u32 = |r: &mut Reader<'_>| u32::from_le_bytes([r.u8(), r.u8(), r.u8(), r.u8()]);
-        let n = u16(db) as usize;
-        assert!((1..=255).contains(&n), "node count");
+        let n = db.u8() as usize;
+        let layout = db.u8();
+        assert!(n >= 1, "node count");
+        assert!(layout <= 1, "layout");
         let mut nodes = Vec::new();
         let mut seen = vec![0; channels];
         for _ in 0..n {
@@ -1129,6 +1133,9 @@ impl Pattern {
                 .iter()
                 .map(|&o| {
                     let mut q = Reader::new(&data[o..]);
+                    if layout == 1 {
+                        return columns(&mut q, c);
+                    }
                     let len = u32::from(u16(&mut q));
                     let row = u16(&mut q) as usize;
                     let heads: Vec<u8> = (0..c).map(|_| q.u8()).collect();
@@ -1156,7 +1163,12 @@ impl Pattern {
                                 .collect()
                         })
                         .collect();
-                    PatternRecord { len, heads, codes }
+                    PatternRecord {
+                        len,
+                        heads,
+                        codes,
+                        steps: false,
+                    }
                 })
                 .collect();
             nodes.push((list, records, Vec::new()));
@@ -1191,8 +1203,15 @@ impl Pattern {
             for (c, &ch) in list.iter().enumerate() {
                 let (s, _, base) = p.heads[c];
                 let code = |k: u32| i64::from(p.codes[k as usize][c]);
+                let value = |code: i32| {
+                    if p.steps {
+                        base.wrapping_add(code).wrapping_shl(s)
+                    } else {
+                        base.wrapping_add(code.wrapping_shl(s))
+                    }
+                };
                 out[ch] = if frac == 0 {
-                    base.wrapping_add((code(j) as u32).wrapping_shl(s) as i32)
+                    value(code(j) as i32)
                 } else {
                     let u = ((frac >> 4) & 0xFFF) as i64;
                     let u2 = (u * u) >> 12;
@@ -1216,11 +1235,41 @@ impl Pattern {
                     }
                     let tap = |k: i64| code((j as i64 + k).clamp(0, i64::from(l) - 1) as u32);
                     let acc: i64 = (0..4).map(|k| w[k as usize] * tap(k - 1)).sum();
-                    let v = ((acc + 2048) >> 12) as i32;
-                    base.wrapping_add(v.wrapping_shl(s))
+                    value(((acc + 2048) >> 12) as i32)
                 };
             }
         }
         out
+    }
+}
+
+/// §11.3b: a layout-1 record of `c` channels, each its head, its base (in
+/// steps; `i32` with head bit 7, else `i16`) and its `L` codes.
+fn columns(q: &mut Reader<'_>, c: usize) -> PatternRecord {
+    let len = u32::from(u16::from_le_bytes([q.u8(), q.u8()]));
+    let mut heads = Vec::new();
+    let mut by_channel = Vec::new();
+    for _ in 0..c {
+        let h = q.u8();
+        let base = if h & 0x80 == 0 {
+            i32::from(i16::from_le_bytes([q.u8(), q.u8()]))
+        } else {
+            i32::from_le_bytes([q.u8(), q.u8(), q.u8(), q.u8()])
+        };
+        let width = [0, 1, 2, 4][usize::from((h >> 5) & 3)];
+        let codes: Vec<u32> = (0..len)
+            .map(|_| (0..width).fold(0u32, |v, i| v | u32::from(q.u8()) << (8 * i)))
+            .collect();
+        heads.push((u32::from(h & 31), width, base));
+        by_channel.push(codes);
+    }
+    let codes = (0..len as usize)
+        .map(|k| by_channel.iter().map(|col| col[k]).collect())
+        .collect();
+    PatternRecord {
+        len,
+        heads,
+        codes,
+        steps: true,
     }
 }

@@ -5,7 +5,7 @@
 //! every member within the channels' tolerances — a member that its group's
 //! pattern cannot carry becomes a pattern of its own, which always can.
 
-use mocap_decoder::pattern::{interpolate, position, taps};
+use mocap_decoder::pattern::{interpolate, position, taps, HEAD_WIDE_BASE};
 
 /// One node's motion: its channels' values and tolerances.
 pub struct NodeInput<'a> {
@@ -41,13 +41,14 @@ impl Accept {
     pub const POSITIONAL: Accept = Accept { max: 5.0, rms: 0.6 };
 }
 
-/// A pattern: `len` samples per channel, each `base + (code << shift)`.
+/// A pattern: `len` samples per channel, each `(base + code) << shift`
+/// (SPEC.md §11.3b).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Pattern {
     /// Samples per channel.
     pub len: usize,
-    /// Per channel: base, shift, code width in bytes (0, 1, 2 or 4; 0 when
-    /// every code is 0).
+    /// Per channel: base (in steps of `2^shift`), shift, code width in
+    /// bytes (0, 1, 2 or 4; 0 when every code is 0).
     pub heads: Vec<(i32, u8, u8)>,
     /// Per channel, `len` codes.
     pub codes: Vec<Vec<u32>>,
@@ -55,36 +56,35 @@ pub struct Pattern {
 
 impl Pattern {
     /// Plays channel `c` for frame `t` of a segment of `n` frames, exactly
-    /// as the decoder does (SPEC.md §11.3).
+    /// as the decoder does (SPEC.md §11.4, layout 1).
     pub fn play(&self, c: usize, t: usize, n: usize) -> i32 {
         let (j, frac) = position(t as u32, n as u32, self.len as u32);
         let (base, shift, _) = self.heads[c];
         let codes = &self.codes[c];
         let (t, w) = taps(j, self.len as u32, frac);
-        interpolate(base, u32::from(shift), t.map(|i| codes[i as usize]), w)
+        interpolate(base, 0, t.map(|i| codes[i as usize]), w).wrapping_shl(u32::from(shift))
     }
 
-    /// Its record in the section (§11.3): sample count, row bytes, the
-    /// channels' heads and bases, then the codes sample by sample.
+    /// Its record in the section (§11.3b, layout 1): sample count, then
+    /// per channel its head, its base (`i16` where it fits) and its codes.
     pub fn record(&self) -> Vec<u8> {
-        let row: usize = self.heads.iter().map(|h| usize::from(h.2)).sum();
         let mut out = (self.len as u16).to_le_bytes().to_vec();
-        out.extend((row as u16).to_le_bytes());
-        for &(_, shift, width) in &self.heads {
+        for (codes, &(base, shift, width)) in self.codes.iter().zip(&self.heads) {
             let code = match width {
                 0 => 0,
                 1 => 1,
                 2 => 2,
                 _ => 3,
             };
-            out.push(shift | code << 5);
-        }
-        for &(base, _, _) in &self.heads {
-            out.extend(base.to_le_bytes());
-        }
-        for j in 0..self.len {
-            for (codes, &(_, _, width)) in self.codes.iter().zip(&self.heads) {
-                out.extend(&codes[j].to_le_bytes()[..usize::from(width)]);
+            let narrow = i16::try_from(base).ok();
+            let wide = if narrow.is_some() { 0 } else { HEAD_WIDE_BASE };
+            out.push(shift | code << 5 | wide);
+            match narrow {
+                Some(b) => out.extend(b.to_le_bytes()),
+                None => out.extend(base.to_le_bytes()),
+            }
+            for c in codes {
+                out.extend(&c.to_le_bytes()[..usize::from(width)]);
             }
         }
         out
@@ -438,38 +438,31 @@ fn quantise(
     let mut codes = Vec::new();
     for (x, &tol) in node.values.iter().zip(&node.tol) {
         let mean = least_squares(x, spans, members, len);
-        let lo = mean.iter().fold(f64::INFINITY, |a, &b| a.min(b)).floor();
-        let hi = mean.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)).ceil();
-        let base = lo.clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
-        let range = (hi - f64::from(base)).max(0.0) as u64;
         let mut shift = 0u8;
         while shift < 31 && (1i64 << (shift + 1)) <= (tol / 3).max(0) {
             shift += 1;
         }
-        let steps = range >> shift;
-        let width: u8 = if steps == 0 {
+        // Each sample to the nearest multiple of the step, in steps.
+        let step = f64::from(1u32 << shift);
+        let lim = f64::from(i32::MAX >> shift);
+        let at: Vec<i64> = mean
+            .iter()
+            .map(|&v| (v / step).round().clamp(-lim - 1.0, lim) as i64)
+            .collect();
+        let lo = at.iter().copied().min().unwrap_or(0);
+        let hi = at.iter().copied().max().unwrap_or(0);
+        let range = (hi - lo) as u64;
+        let width: u8 = if range == 0 {
             0
-        } else if steps < 256 {
+        } else if range < 256 {
             1
-        } else if steps < 65_536 {
+        } else if range < 65_536 {
             2
         } else {
             4
         };
-        let step = f64::from(1u32 << shift);
-        let max_code = match width {
-            4 => u32::MAX,
-            w => (1u32 << (8 * w)) - 1,
-        };
-        codes.push(
-            mean.iter()
-                .map(|&v| {
-                    (((v - f64::from(base)) / step).round().max(0.0) as u64)
-                        .min(u64::from(max_code)) as u32
-                })
-                .collect(),
-        );
-        heads.push((base, shift, width));
+        codes.push(at.iter().map(|&v| (v - lo) as u32).collect());
+        heads.push((lo as i32, shift, width));
     }
     Pattern { len, heads, codes }
 }

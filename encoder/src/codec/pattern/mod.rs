@@ -146,7 +146,7 @@ pub fn encode_shared(
         .collect();
     let params = SegmentParams::at_rate(fps);
     let mut decoded = vec![vec![Vec::new(); channels]; takes.len()];
-    let mut database = (nodes.len() as u16).to_le_bytes().to_vec();
+    let mut database = vec![nodes.len() as u8, mocap_decoder::pattern::LAYOUT_COLUMNS];
     let mut sections: Vec<Vec<u8>> = vec![vec![mocap_decoder::pattern::FLAG_SHARED]; takes.len()];
     for channels in nodes {
         let mut channels = channels.clone();
@@ -245,6 +245,8 @@ pub struct SectionInfo {
     pub nodes: Vec<[usize; 5]>,
     /// Bytes of the database.
     pub database_len: usize,
+    /// Its records' layout (§11.2): 0 rows, 1 columns.
+    pub layout: u8,
 }
 
 /// Reads the sizes of a `pattern` section (`None` if it does not parse,
@@ -276,7 +278,7 @@ pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
     let u32_at = |at: usize| -> Option<usize> {
         Some(u32::from_le_bytes(db.get(at..at + 4)?.try_into().ok()?) as usize)
     };
-    let n = u16_at(0)?;
+    let n = usize::from(*db.first()?);
     let mut at = 2;
     let mut nodes = Vec::new();
     for _ in 0..n {
@@ -294,6 +296,7 @@ pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
     Some(SectionInfo {
         nodes,
         database_len: at,
+        layout: *db.get(1)?,
     })
 }
 
@@ -302,12 +305,13 @@ impl SectionInfo {
     pub fn describe(&self) -> String {
         let sum = |i: usize| self.nodes.iter().map(|n| n[i]).sum::<usize>();
         let mut s = format!(
-            "  nodes: {}, segments: {}, patterns: {}, pattern samples: {}, database {} B\n",
+            "  nodes: {}, segments: {}, patterns: {}, pattern samples: {}, database {} B ({})\n",
             self.nodes.len(),
             sum(1),
             sum(2),
             sum(3),
-            self.database_len
+            self.database_len,
+            if self.layout == 0 { "rows" } else { "columns" }
         );
         for (i, n) in self.nodes.iter().enumerate() {
             s += &format!(

@@ -13,6 +13,9 @@
 //! curve there, then per channel four codes, weighed and scaled. No state
 //! beyond the output.
 
+mod columns;
+mod rows;
+
 use crate::error::Error;
 use crate::reader::Reader;
 
@@ -24,6 +27,15 @@ pub const FLAG_SHARED: u8 = 1;
 pub const MAX_NODES: usize = 255;
 /// Longest segment, frames (so the position arithmetic stays in 32 bits).
 pub const MAX_SEGMENT: u32 = 65_535;
+/// Record layout 0 (§11.3): per pattern, the heads, the `i32` bases, then
+/// the codes sample by sample (rows).
+pub const LAYOUT_ROWS: u8 = 0;
+/// Record layout 1 (§11.3b): per channel its head, its base in steps
+/// (`i16`, or `i32`), then its codes (a column): the four samples the curve
+/// reads are next to each other.
+pub const LAYOUT_COLUMNS: u8 = 1;
+/// Head bit 7 in layout 1: the channel's base is an `i32` (else an `i16`).
+pub const HEAD_WIDE_BASE: u8 = 0x80;
 
 /// A validated view of a `pattern` codec section and its database.
 #[derive(Clone, Copy, Debug)]
@@ -34,6 +46,8 @@ pub(crate) struct PatternCodec<'a> {
     segments: &'a [u8],
     node_count: usize,
     frames: u32,
+    /// The records' layout: [`LAYOUT_ROWS`] or [`LAYOUT_COLUMNS`] (§11.2).
+    layout: u8,
 }
 
 /// One node of the database.
@@ -177,31 +191,50 @@ pub fn interpolate(base: i32, shift: u32, codes: [u32; 4], w: [i32; 4]) -> i32 {
     base.wrapping_add(code.wrapping_shl(shift))
 }
 
-/// A pattern record (§11.3), split: its sample count, the bytes of one
-/// sample row, the channels' head bytes (shift in bits 0–4, code width `0,
-/// 1, 2, 4` bytes in bits 5–6 as `0…3`), their bases (`i32` each) and the
-/// rows.
-struct Record<'a> {
-    len: usize,
-    row: usize,
-    heads: &'a [u8],
-    bases: &'a [u8],
-    rows: &'a [u8],
-}
-
-fn record(rec: &[u8], nc: usize) -> Option<Record<'_>> {
-    let len = usize::from(u16_at(rec, 0)?);
-    let row = usize::from(u16_at(rec, 2)?);
-    let (heads, rest) = rec.get(4..)?.split_at_checked(nc)?;
-    let (bases, rest) = rest.split_at_checked(nc.checked_mul(4)?)?;
-    let rows = rest.get(..len.checked_mul(row)?)?;
-    Some(Record {
-        len,
-        row,
-        heads,
-        bases,
-        rows,
-    })
+/// The samples the curve reads as one window (§11.3b): its first sample
+/// `s0` and the weights of samples `s0 … s0 + 3` — [`taps`]' weights added
+/// up per sample, so `Σ W·code` is exactly `Σ w·code` over the taps. The
+/// window starts at the first tap and stays inside the pattern when it has
+/// 4 samples or more (`s0 ≤ len − 4`); a shorter pattern's window is the
+/// pattern, its weights past the end 0.
+#[inline]
+pub fn window(j: u32, len: u32, frac: u32) -> (u32, [i32; 4]) {
+    let w = weights(frac);
+    if j >= 1 && j.wrapping_add(2) < len {
+        // Inside the pattern: the taps j − 1 … j + 2, nothing folded.
+        return (j.wrapping_sub(1), w);
+    }
+    if len < 2 {
+        return (0, [4096, 0, 0, 0]);
+    }
+    // At an end: taps()'s folding, the taps added up per sample.
+    let [mut w0, mut w1, mut w2, mut w3] = w;
+    let last = len.wrapping_sub(1);
+    let j = j.min(last);
+    if j == 0 {
+        w1 = w1.wrapping_add(w0.wrapping_mul(2));
+        w2 = w2.wrapping_sub(w0);
+        w0 = 0;
+    }
+    if j.wrapping_add(1) == last {
+        w2 = w2.wrapping_add(w3.wrapping_mul(2));
+        w1 = w1.wrapping_sub(w3);
+        w3 = 0;
+    }
+    let t = [
+        j.saturating_sub(1),
+        j,
+        j.wrapping_add(1).min(last),
+        j.wrapping_add(2).min(last),
+    ];
+    let s0 = t[0].min(len.saturating_sub(4));
+    let mut out = [0i32; 4];
+    for (&t, w) in t.iter().zip([w0, w1, w2, w3]) {
+        // Every tap is within s0 … s0 + 3.
+        let k = (t.wrapping_sub(s0) & 3) as usize;
+        out[k] = out[k].wrapping_add(w);
+    }
+    (s0, out)
 }
 
 /// A channel head's code width in bytes.
@@ -233,7 +266,7 @@ impl<'a> PatternCodec<'a> {
         } else {
             rest
         };
-        let (node_count, nodes, len) = check_database(db, channels)?;
+        let (node_count, layout, nodes, len) = check_database(db, channels)?;
         // A model section is the database alone; in the codec section the
         // segment lists follow it.
         let segments = if shared {
@@ -259,189 +292,175 @@ impl<'a> PatternCodec<'a> {
             segments,
             node_count,
             frames,
+            layout,
         })
     }
 
-    /// Decodes frame `f` into `out` (one value per channel). `None` only if
-    /// an invariant of the validated section is broken. Out of line: inlined
-    /// into the player's frame loop every codec shares, it took the `index`
-    /// path 16 more bytes of stack on the M0 (572 against 556).
-    #[inline(never)]
+    /// Decodes frame `f` into `out` (one value per channel), with no
+    /// state: every node's segment by a binary search.
+    #[cfg(test)]
     pub(crate) fn decode_frame(&self, f: u32, out: &mut [i32]) -> Option<()> {
-        let mut r = Reader::new(self.nodes);
-        let mut s = Reader::new(self.segments);
+        self.decode(f, out, &mut [])
+    }
+
+    /// Decodes frame `f` into `out` (one value per channel). `cursors`
+    /// holds [`CURSOR_WORDS`] per node that remember each node's segment
+    /// from the last call (all 0 at first: no segment yet): the next
+    /// frame is in the same segment or the next one, no search. Without
+    /// room for every node's cursor (e.g. empty) the nodes past it search.
+    /// `None` only if an invariant of the validated section is broken.
+    /// Out of line: inlined into the player's frame loop every codec
+    /// shares, it took the `index` path 16 more bytes of stack on the M0.
+    #[inline(never)]
+    pub(crate) fn decode(&self, f: u32, out: &mut [i32], cursors: &mut [i32]) -> Option<()> {
+        let nodes = self.nodes;
+        let segments = self.segments;
+        let mut cursors = cursors.as_chunks_mut::<CURSOR_WORDS>().0.iter_mut();
+        let (mut at, mut s) = (0usize, 0usize);
         for _ in 0..self.node_count {
-            let node = read_node(&mut r)?;
-            let (n, list) = read_segments(&mut s)?;
-            self.decode_node(&node, n, list, f, out)?;
+            // The node record (§11.2) and its segment list (§11.1).
+            let &[c0, c1, p0, p1, d0, d1, d2, d3] = nodes.get(at..)?.first_chunk::<8>()?;
+            let nc = usize::from(u16::from_le_bytes([c0, c1]));
+            let np = usize::from(u16::from_le_bytes([p0, p1]));
+            let d = u32::from_le_bytes([d0, d1, d2, d3]) as usize;
+            let ch_at = at.wrapping_add(8);
+            let off_at = ch_at.wrapping_add(nc.wrapping_mul(2));
+            let data_at = off_at.wrapping_add(np.wrapping_mul(4));
+            at = data_at.wrapping_add(d);
+            let &[s0, s1] = segments.get(s..)?.first_chunk::<2>()?;
+            let count = usize::from(u16::from_le_bytes([s0, s1]));
+            let list_at = s.wrapping_add(2);
+            s = list_at.wrapping_add(count.wrapping_mul(SEGMENT));
+            let list = segments.get(list_at..s)?;
+            let seg = match cursors.next() {
+                Some(c) => Cursor::load(c).find(list, f, self.frames, nodes, off_at, c)?,
+                None => Cursor::search(list, f, self.frames, nodes, off_at)?,
+            };
+            let channels = nodes.get(ch_at..off_at)?.as_chunks::<2>().0;
+            let rec = nodes.get(data_at..at)?.get(seg.off as usize..)?;
+            let t = f.wrapping_sub(seg.start);
+            let n = seg.end.wrapping_sub(seg.start);
+            if self.layout == LAYOUT_COLUMNS {
+                columns::play(rec, channels, t, n, out)?;
+            } else {
+                rows::play(rec, channels, t, n, out)?;
+            }
         }
         Some(())
     }
+}
 
-    fn decode_node(
-        &self,
-        node: &Node<'_>,
-        count: usize,
-        segments: &[u8],
+/// Player-state words per node: the segment a node played last (§11.4).
+pub(crate) const CURSOR_WORDS: usize = 4;
+
+/// A node's segment: its number + 1 (0: none yet), its start and end
+/// frames and its pattern record's offset in the node's records.
+#[derive(Clone, Copy)]
+struct Cursor {
+    next: u32,
+    start: u32,
+    end: u32,
+    off: u32,
+}
+
+impl Cursor {
+    fn load(c: &[i32; CURSOR_WORDS]) -> Cursor {
+        Cursor {
+            next: c[0] as u32,
+            start: c[1] as u32,
+            end: c[2] as u32,
+            off: c[3] as u32,
+        }
+    }
+
+    /// The segment of frame `f`: this one, the next one, or searched; the
+    /// cursor `c` then holds it.
+    #[inline(always)]
+    fn find(
+        self,
+        list: &[u8],
         f: u32,
-        out: &mut [i32],
-    ) -> Option<()> {
+        frames: u32,
+        nodes: &[u8],
+        off_at: usize,
+        c: &mut [i32; CURSOR_WORDS],
+    ) -> Option<Cursor> {
+        if self.start <= f && f < self.end {
+            return Some(self);
+        }
+        let count = list.len() / SEGMENT;
+        let i = self.next as usize;
+        let seg = if f >= self.end && i < count && f < end_of(list, i.wrapping_add(1), frames)? {
+            Cursor::at(list, i, frames, nodes, off_at)?
+        } else {
+            Cursor::search(list, f, frames, nodes, off_at)?
+        };
+        *c = [
+            seg.next as i32,
+            seg.start as i32,
+            seg.end as i32,
+            seg.off as i32,
+        ];
+        Some(seg)
+    }
+
+    /// The segment of frame `f` by a binary search over the starts (§11.4).
+    fn search(list: &[u8], f: u32, frames: u32, nodes: &[u8], off_at: usize) -> Option<Cursor> {
         // The last segment starting at or before f (segment 0 starts at 0).
-        let (mut lo, mut hi) = (0usize, count);
+        let (mut lo, mut hi) = (0usize, list.len() / SEGMENT);
         while hi.wrapping_sub(lo) > 1 {
             let mid = lo.wrapping_add(hi.wrapping_sub(lo) / 2);
-            if u32_at(segments, mid.wrapping_mul(SEGMENT))? <= f {
+            if u32_at(list, mid.wrapping_mul(SEGMENT))? <= f {
                 lo = mid;
             } else {
                 hi = mid;
             }
         }
-        let at = lo.wrapping_mul(SEGMENT);
-        let start = u32_at(segments, at)?;
-        let end = if hi < count {
-            u32_at(segments, hi.wrapping_mul(SEGMENT))?
-        } else {
-            self.frames
-        };
-        let pattern = usize::from(u16_at(segments, at.wrapping_add(4))?);
-        let off = usize::try_from(u32_at(node.offsets, pattern.wrapping_mul(4))?).ok()?;
-        let Record {
-            len,
-            row,
-            heads,
-            bases,
-            rows,
-        } = record(node.data.get(off..)?, node.channel_count())?;
-        let (j, frac) = position(f.wrapping_sub(start), end.wrapping_sub(start), len as u32);
-        let p = Samples {
-            heads,
-            bases: bases.as_chunks::<4>().0,
-            channels: node.channels.as_chunks::<2>().0,
-        };
-        let at = |k: u32| rows.get((k as usize).wrapping_mul(row)..);
-        if frac == 0 {
-            let a = at(j)?;
-            p.play::<false>([a, a, a, a], [0; 4], out)
-        } else {
-            let (t, w) = taps(j, len as u32, frac);
-            let [t0, t1, t2, t3] = t;
-            p.play::<true>([at(t0)?, at(t1)?, at(t2)?, at(t3)?], w, out)
-        }
+        Cursor::at(list, lo, frames, nodes, off_at)
+    }
+
+    /// Segment `i` of the list.
+    fn at(list: &[u8], i: usize, frames: u32, nodes: &[u8], off_at: usize) -> Option<Cursor> {
+        let at = i.wrapping_mul(SEGMENT);
+        let pattern = usize::from(u16_at(list, at.wrapping_add(4))?);
+        Some(Cursor {
+            next: i.wrapping_add(1) as u32,
+            start: u32_at(list, at)?,
+            end: end_of(list, i.wrapping_add(1), frames)?,
+            off: u32_at(nodes, off_at.wrapping_add(pattern.wrapping_mul(4)))?,
+        })
     }
 }
 
-/// A pattern's per-channel parts (§11.3) and the node's channels.
-struct Samples<'a> {
-    heads: &'a [u8],
-    bases: &'a [[u8; 4]],
-    channels: &'a [[u8; 2]],
-}
-
-impl Samples<'_> {
-    /// Writes each channel at a position: sample row `rows[1]`, or with
-    /// `CURVE` the curve through the rows of the four taps with weights `w`
-    /// (§11.4).
-    #[inline(always)]
-    fn play<const CURVE: bool>(
-        &self,
-        rows: [&[u8]; 4],
-        w: [i32; 4],
-        out: &mut [i32],
-    ) -> Option<()> {
-        let mut at = 0usize;
-        let [r0, r1, r2, r3] = rows;
-        for ((&h, base), ch) in self.heads.iter().zip(self.bases).zip(self.channels) {
-            let shift = h & 31;
-            let v = match h >> 5 {
-                1 if CURVE => {
-                    let c = |r: &[u8]| r.get(at).map(|&b| i32::from(b));
-                    // |Σ w·c| < 5 120 · 2^8: exact in 32 bits.
-                    let acc = weigh(w, [c(r0)?, c(r1)?, c(r2)?, c(r3)?]);
-                    at = at.wrapping_add(1);
-                    curve(*base, shift, acc)
-                }
-                1 => {
-                    let c = u32::from(*r1.get(at)?);
-                    at = at.wrapping_add(1);
-                    sample(*base, shift, c)
-                }
-                2 if CURVE => {
-                    let c = |r: &[u8]| u16_at(r, at).map(i32::from);
-                    // |Σ w·c| < 5 120 · 2^16: exact in 32 bits.
-                    let acc = weigh(w, [c(r0)?, c(r1)?, c(r2)?, c(r3)?]);
-                    at = at.wrapping_add(2);
-                    curve(*base, shift, acc)
-                }
-                2 => {
-                    let c = u32::from(u16_at(r1, at)?);
-                    at = at.wrapping_add(2);
-                    sample(*base, shift, c)
-                }
-                3 => {
-                    let codes = [
-                        u32_at(r0, at)?,
-                        u32_at(r1, at)?,
-                        u32_at(r2, at)?,
-                        u32_at(r3, at)?,
-                    ];
-                    at = at.wrapping_add(4);
-                    if CURVE {
-                        interpolate(i32::from_le_bytes(*base), u32::from(shift), codes, w)
-                    } else {
-                        sample(*base, shift, codes[1])
-                    }
-                }
-                _ => i32::from_le_bytes(*base),
-            };
-            put(out, ch, v);
-        }
-        Some(())
+/// Where segment `i − 1` ends: segment `i`'s start, or the frame count
+/// past the last.
+#[inline(always)]
+fn end_of(list: &[u8], i: usize, frames: u32) -> Option<u32> {
+    if i.wrapping_mul(SEGMENT) < list.len() {
+        u32_at(list, i.wrapping_mul(SEGMENT))
+    } else {
+        Some(frames)
     }
 }
 
-/// Writes `v` to the output channel `c` (the node's `u16` channel number).
-#[inline(always)]
-fn put(out: &mut [i32], c: &[u8; 2], v: i32) {
-    if let Some(o) = out.get_mut(usize::from(u16::from_le_bytes(*c))) {
-        *o = v;
-    }
-}
-
-/// A sample's value: `base + (code << shift)`, wrapping (§11.3).
-#[inline(always)]
-fn sample(base: [u8; 4], shift: u8, code: u32) -> i32 {
-    i32::from_le_bytes(base).wrapping_add(code.wrapping_shl(u32::from(shift)) as i32)
-}
-
-/// `Σ w·c` of four codes in 32-bit arithmetic (exact for codes below 2^16).
-#[inline(always)]
-fn weigh(w: [i32; 4], c: [i32; 4]) -> i32 {
-    w[0].wrapping_mul(c[0])
-        .wrapping_add(w[1].wrapping_mul(c[1]))
-        .wrapping_add(w[2].wrapping_mul(c[2]))
-        .wrapping_add(w[3].wrapping_mul(c[3]))
-}
-
-/// The curve's value from the weighed sum `acc` of four codes (§11.4).
-#[inline(always)]
-fn curve(base: [u8; 4], shift: u8, acc: i32) -> i32 {
-    let code = acc.wrapping_add(1 << (WEIGHT_BITS - 1)) >> WEIGHT_BITS;
-    i32::from_le_bytes(base).wrapping_add(code.wrapping_shl(u32::from(shift)))
-}
-
-/// Validates the database at the start of `db` (§11.2–§11.3) for
-/// `channels` channels: its node count, its node records and its length.
-fn check_database(db: &[u8], channels: usize) -> Result<(usize, &[u8], usize), Error> {
+/// Validates the database at the start of `db` (§11.2–§11.3b) for
+/// `channels` channels: its node count, its records' layout, its node
+/// records and its length.
+fn check_database(db: &[u8], channels: usize) -> Result<(usize, u8, &[u8], usize), Error> {
     let malformed = |rule| Error::PatternMalformed { rule };
     let mut r = Reader::new(db);
-    let node_count = usize::from(r.u16_le().ok_or(malformed("database truncated"))?);
-    if node_count == 0 || node_count > MAX_NODES {
+    let node_count = usize::from(r.u8().ok_or(malformed("database truncated"))?);
+    let layout = r.u8().ok_or(malformed("database truncated"))?;
+    if node_count == 0 {
         return Err(malformed("node count not in 1..=255"));
+    }
+    if layout > LAYOUT_COLUMNS {
+        return Err(malformed("an unknown record layout"));
     }
     let mut total = 0usize;
     for _ in 0..node_count {
         let node = read_node(&mut r).ok_or(malformed("database truncated"))?;
-        check_node(&node)?;
+        check_node(&node, layout)?;
         total = total.wrapping_add(node.channel_count());
     }
     let nodes = db.get(2..r.pos()).unwrap_or(&[]);
@@ -449,7 +468,7 @@ fn check_database(db: &[u8], channels: usize) -> Result<(usize, &[u8], usize), E
         return Err(malformed("the nodes' channels are not the header's"));
     }
     check_cover(nodes, node_count, channels)?;
-    Ok((node_count, nodes, r.pos()))
+    Ok((node_count, layout, nodes, r.pos()))
 }
 
 /// The rules of a node's segment list (§11.1).
@@ -483,8 +502,8 @@ fn check_segments(count: usize, list: &[u8], patterns: usize, frames: u32) -> Re
     Ok(())
 }
 
-/// The rules of one database node record (§11.2–§11.3).
-fn check_node(node: &Node<'_>) -> Result<(), Error> {
+/// The rules of one database node record (§11.2–§11.3b).
+fn check_node(node: &Node<'_>, layout: u8) -> Result<(), Error> {
     let malformed = |rule| Error::PatternMalformed { rule };
     let nc = node.channel_count();
     if nc == 0 || node.pattern_count == 0 {
@@ -504,9 +523,13 @@ fn check_node(node: &Node<'_>) -> Result<(), Error> {
             .ok()
             .and_then(|o| node.data.get(o..))
             .ok_or(malformed("a pattern offset past the node's data"))?;
-        let Record {
+        if layout == LAYOUT_COLUMNS {
+            check_columns(rec, nc)?;
+            continue;
+        }
+        let rows::Record {
             len, row, heads, ..
-        } = record(rec, nc).ok_or(malformed("pattern truncated"))?;
+        } = rows::record(rec, nc).ok_or(malformed("pattern truncated"))?;
         if len == 0 {
             return Err(malformed("a pattern without samples"));
         }
@@ -522,6 +545,25 @@ fn check_node(node: &Node<'_>) -> Result<(), Error> {
                 "a row length that is not the sum of the code widths",
             ));
         }
+    }
+    Ok(())
+}
+
+/// The rules of a layout-1 record (§11.3b) of `nc` channels at the start
+/// of `rec`: samples, and every channel's head, base and codes there.
+fn check_columns(rec: &[u8], nc: usize) -> Result<(), Error> {
+    let malformed = |rule| Error::PatternMalformed { rule };
+    let len = usize::from(u16_at(rec, 0).ok_or(malformed("pattern truncated"))?);
+    if len == 0 {
+        return Err(malformed("a pattern without samples"));
+    }
+    let mut rest = rec.get(2..).unwrap_or(&[]);
+    for _ in 0..nc {
+        let (_, h, col) = columns::split_head(rest).ok_or(malformed("pattern truncated"))?;
+        rest = len
+            .checked_mul(width_of(h))
+            .and_then(|b| col.get(b..))
+            .ok_or(malformed("pattern truncated"))?;
     }
     Ok(())
 }
@@ -644,6 +686,72 @@ mod tests {
         two.extend_from_slice(&SECTION[60..]);
         two.extend_from_slice(&[1, 0, 0, 0, 0, 0, 0, 0]);
         assert_eq!(rule(&two, None, 3, 6), "a channel in no node or in two");
+    }
+
+    /// SPEC.md §7.8's section: §7.7's clip in layout 1 (columns).
+    const COLUMNS: [u8; 64] = [
+        0x00, 0x01, 0x01, 0x02, 0x00, 0x02, 0x00, 0x1b, 0x00, 0x00, 0x00, 0x00, 0x00, 0x01, 0x00,
+        0x00, 0x00, 0x00, 0x00, 0x11, 0x00, 0x00, 0x00, 0x03, 0x00, 0x22, 0xfa, 0x00, 0x00, 0x64,
+        0xc8, 0x40, 0x0c, 0xfe, 0x00, 0x00, 0xf4, 0x01, 0xe8, 0x03, 0x01, 0x00, 0x80, 0xd0, 0x07,
+        0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x05, 0x00,
+        0x00, 0x00, 0x01, 0x00,
+    ];
+
+    #[test]
+    fn the_columns_section_plays_and_its_rules_are_named() {
+        let codec = PatternCodec::parse(&COLUMNS, None, 2, 6).unwrap();
+        let expected = [
+            [1000, -500],
+            [1200, -250],
+            [1400, 0],
+            [1600, 250],
+            [1800, 500],
+            [2000, 0],
+        ];
+        for (f, want) in expected.iter().enumerate() {
+            let mut out = [0i32; 2];
+            codec.decode_frame(f as u32, &mut out).unwrap();
+            assert_eq!(&out, want, "frame {f}");
+        }
+        let with = |at: usize, v: u8| {
+            let mut b = COLUMNS.to_vec();
+            b[at] = v;
+            b
+        };
+        assert_eq!(rule(&with(2, 2), None, 2, 6), "an unknown record layout");
+        assert_eq!(rule(&with(1, 0), None, 2, 6), "node count not in 1..=255");
+        // Pattern 1's Zrotation with a 4-byte code: past the node's data.
+        assert_eq!(rule(&with(47, 0x60), None, 2, 6), "pattern truncated");
+    }
+
+    /// The window's weights are taps()' weights added up per sample: the
+    /// same weighed sum of any codes, never a weight past the pattern.
+    #[test]
+    fn window_weighs_as_the_taps_do() {
+        let codes: Vec<i64> = (0..12).map(|k| (k * 37 % 11) as i64 - 3).collect();
+        for len in 1..10u32 {
+            for j in 0..len {
+                for frac in [0u32, 1, 4_096, 21_845, 32_768, 65_535] {
+                    let (t, w) = taps(j, len, frac);
+                    let want: i64 = t
+                        .iter()
+                        .zip(w)
+                        .map(|(&t, w)| codes[t as usize] * i64::from(w))
+                        .sum();
+                    let (s0, ww) = window(j, len, frac);
+                    let got: i64 = ww
+                        .iter()
+                        .enumerate()
+                        .map(|(k, &w)| {
+                            let at = s0 as usize + k;
+                            assert!(at < len as usize || w == 0, "{len} {j} {frac}");
+                            codes.get(at).copied().unwrap_or(0) * i64::from(w)
+                        })
+                        .sum();
+                    assert_eq!(got, want, "len {len} j {j} frac {frac}");
+                }
+            }
+        }
     }
 
     #[test]
