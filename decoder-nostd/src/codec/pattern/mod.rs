@@ -231,8 +231,9 @@ pub fn window(j: u32, len: u32, frac: u32) -> (u32, [i32; 4]) {
     let mut out = [0i32; 4];
     for (&t, w) in t.iter().zip([w0, w1, w2, w3]) {
         // Every tap is within s0 … s0 + 3.
-        let k = (t.wrapping_sub(s0) & 3) as usize;
-        out[k] = out[k].wrapping_add(w);
+        if let Some(x) = out.get_mut((t.wrapping_sub(s0) & 3) as usize) {
+            *x = x.wrapping_add(w);
+        }
     }
     (s0, out)
 }
@@ -313,121 +314,168 @@ impl<'a> PatternCodec<'a> {
     /// shares, it took the `index` path 16 more bytes of stack on the M0.
     #[inline(never)]
     pub(crate) fn decode(&self, f: u32, out: &mut [i32], cursors: &mut [i32]) -> Option<()> {
-        let nodes = self.nodes;
-        let segments = self.segments;
-        let mut cursors = cursors.as_chunks_mut::<CURSOR_WORDS>().0.iter_mut();
-        let (mut at, mut s) = (0usize, 0usize);
-        for _ in 0..self.node_count {
-            // The node record (§11.2) and its segment list (§11.1).
-            let &[c0, c1, p0, p1, d0, d1, d2, d3] = nodes.get(at..)?.first_chunk::<8>()?;
-            let nc = usize::from(u16::from_le_bytes([c0, c1]));
-            let np = usize::from(u16::from_le_bytes([p0, p1]));
-            let d = u32::from_le_bytes([d0, d1, d2, d3]) as usize;
-            let ch_at = at.wrapping_add(8);
-            let off_at = ch_at.wrapping_add(nc.wrapping_mul(2));
-            let data_at = off_at.wrapping_add(np.wrapping_mul(4));
-            at = data_at.wrapping_add(d);
-            let &[s0, s1] = segments.get(s..)?.first_chunk::<2>()?;
-            let count = usize::from(u16::from_le_bytes([s0, s1]));
-            let list_at = s.wrapping_add(2);
-            s = list_at.wrapping_add(count.wrapping_mul(SEGMENT));
-            let list = segments.get(list_at..s)?;
-            let seg = match cursors.next() {
-                Some(c) => Cursor::load(c).find(list, f, self.frames, nodes, off_at, c)?,
-                None => Cursor::search(list, f, self.frames, nodes, off_at)?,
-            };
-            let channels = nodes.get(ch_at..off_at)?.as_chunks::<2>().0;
-            let rec = nodes.get(data_at..at)?.get(seg.off as usize..)?;
-            let t = f.wrapping_sub(seg.start);
-            let n = seg.end.wrapping_sub(seg.start);
-            if self.layout == LAYOUT_COLUMNS {
-                columns::play(rec, channels, t, n, out)?;
-            } else {
-                rows::play(rec, channels, t, n, out)?;
+        let need = self.node_count.wrapping_mul(CURSOR_WORDS);
+        if let Some(c) = cursors.get_mut(..need) {
+            let c = c.as_chunks_mut::<CURSOR_WORDS>().0;
+            if c.first()?[DATA_END] == 0 {
+                self.init_cursors(c)?;
+            }
+            for c in c.iter_mut() {
+                self.play_node(c, f, out)?;
+            }
+        } else {
+            // No room: each node's cursor for this frame alone.
+            let (mut at, mut s) = (0usize, 0usize);
+            for _ in 0..self.node_count {
+                let mut c = [0i32; CURSOR_WORDS];
+                (at, s) = self.cursor_of(at, s, &mut c)?;
+                self.play_node(&mut c, f, out)?;
             }
         }
         Some(())
     }
-}
 
-/// Player-state words per node: the segment a node played last (§11.4).
-pub(crate) const CURSOR_WORDS: usize = 4;
-
-/// A node's segment: its number + 1 (0: none yet), its start and end
-/// frames and its pattern record's offset in the node's records.
-#[derive(Clone, Copy)]
-struct Cursor {
-    next: u32,
-    start: u32,
-    end: u32,
-    off: u32,
-}
-
-impl Cursor {
-    fn load(c: &[i32; CURSOR_WORDS]) -> Cursor {
-        Cursor {
-            next: c[0] as u32,
-            start: c[1] as u32,
-            end: c[2] as u32,
-            off: c[3] as u32,
+    /// Fills every node's cursor (no segment yet) by walking the database
+    /// and the segment lists once.
+    #[inline(never)]
+    fn init_cursors(&self, cursors: &mut [[i32; CURSOR_WORDS]]) -> Option<()> {
+        let (mut at, mut s) = (0usize, 0usize);
+        for c in cursors {
+            (at, s) = self.cursor_of(at, s, c)?;
         }
+        Some(())
     }
 
-    /// The segment of frame `f`: this one, the next one, or searched; the
-    /// cursor `c` then holds it.
-    #[inline(always)]
-    fn find(
-        self,
-        list: &[u8],
-        f: u32,
-        frames: u32,
-        nodes: &[u8],
-        off_at: usize,
+    /// The cursor of the node whose record starts at `at` in the database
+    /// and whose segment list starts at `s` (§11.1–§11.2), no segment yet;
+    /// where the next node's record and list start.
+    fn cursor_of(
+        &self,
+        at: usize,
+        s: usize,
         c: &mut [i32; CURSOR_WORDS],
-    ) -> Option<Cursor> {
-        if self.start <= f && f < self.end {
-            return Some(self);
+    ) -> Option<(usize, usize)> {
+        let node = NodeAt::read(self.nodes, at)?;
+        let count = usize::from(u16_at(self.segments, s)?);
+        *c = [0; CURSOR_WORDS];
+        c[DATA_END] = node.data_end as i32;
+        c[CH_AT] = node.ch_at as i32;
+        c[NC] = node.nc as i32;
+        c[NODE_AT] = at as i32;
+        c[LIST_AT] = s as i32;
+        let next = s.wrapping_add(2).wrapping_add(count.wrapping_mul(SEGMENT));
+        Some((node.data_end, next))
+    }
+
+    /// Decodes frame `f` of the node of cursor `c` into its channels of
+    /// `out`, moving the cursor to the frame's segment.
+    #[inline(always)]
+    fn play_node(&self, c: &mut [i32; CURSOR_WORDS], f: u32, out: &mut [i32]) -> Option<()> {
+        if !((c[START] as u32) <= f && f < (c[END] as u32)) {
+            self.advance(c, f)?;
         }
-        let count = list.len() / SEGMENT;
-        let i = self.next as usize;
-        let seg = if f >= self.end && i < count && f < end_of(list, i.wrapping_add(1), frames)? {
-            Cursor::at(list, i, frames, nodes, off_at)?
+        let [start, end, rec_at, data_end, ch_at, nc, ..] = c.map(|w| w as u32 as usize);
+        let channels = self
+            .nodes
+            .get(ch_at..ch_at.wrapping_add(nc.wrapping_mul(2)))?;
+        let channels = channels.as_chunks::<2>().0;
+        let rec = self.nodes.get(rec_at..data_end)?;
+        let t = f.wrapping_sub(start as u32);
+        let n = end.wrapping_sub(start) as u32;
+        if self.layout == LAYOUT_COLUMNS {
+            columns::play(rec, channels, t, n, out)
         } else {
-            Cursor::search(list, f, frames, nodes, off_at)?
-        };
-        *c = [
-            seg.next as i32,
-            seg.start as i32,
-            seg.end as i32,
-            seg.off as i32,
-        ];
-        Some(seg)
-    }
-
-    /// The segment of frame `f` by a binary search over the starts (§11.4).
-    fn search(list: &[u8], f: u32, frames: u32, nodes: &[u8], off_at: usize) -> Option<Cursor> {
-        // The last segment starting at or before f (segment 0 starts at 0).
-        let (mut lo, mut hi) = (0usize, list.len() / SEGMENT);
-        while hi.wrapping_sub(lo) > 1 {
-            let mid = lo.wrapping_add(hi.wrapping_sub(lo) / 2);
-            if u32_at(list, mid.wrapping_mul(SEGMENT))? <= f {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
+            rows::play(rec, channels, t, n, out)
         }
-        Cursor::at(list, lo, frames, nodes, off_at)
     }
 
-    /// Segment `i` of the list.
-    fn at(list: &[u8], i: usize, frames: u32, nodes: &[u8], off_at: usize) -> Option<Cursor> {
+    /// Moves cursor `c` to the segment of frame `f`: the next one, or
+    /// found by a binary search over the starts (§11.4).
+    #[inline(never)]
+    fn advance(&self, c: &mut [i32; CURSOR_WORDS], f: u32) -> Option<()> {
+        let node = NodeAt::read(self.nodes, c[NODE_AT] as u32 as usize)?;
+        let s = c[LIST_AT] as u32 as usize;
+        let count = usize::from(u16_at(self.segments, s)?);
+        let list_at = s.wrapping_add(2);
+        let list = self
+            .segments
+            .get(list_at..list_at.wrapping_add(count.wrapping_mul(SEGMENT)))?;
+        let next = c[NEXT] as u32 as usize;
+        let i = if f >= c[END] as u32
+            && next < count
+            && f < end_of(list, next.wrapping_add(1), self.frames)?
+        {
+            next
+        } else {
+            // The last segment starting at or before f (segment 0 starts at 0).
+            let (mut lo, mut hi) = (0usize, count);
+            while hi.wrapping_sub(lo) > 1 {
+                let mid = lo.wrapping_add(hi.wrapping_sub(lo) / 2);
+                if u32_at(list, mid.wrapping_mul(SEGMENT))? <= f {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        };
         let at = i.wrapping_mul(SEGMENT);
         let pattern = usize::from(u16_at(list, at.wrapping_add(4))?);
-        Some(Cursor {
-            next: i.wrapping_add(1) as u32,
-            start: u32_at(list, at)?,
-            end: end_of(list, i.wrapping_add(1), frames)?,
-            off: u32_at(nodes, off_at.wrapping_add(pattern.wrapping_mul(4)))?,
+        let off = u32_at(
+            self.nodes,
+            node.off_at.wrapping_add(pattern.wrapping_mul(4)),
+        )?;
+        c[START] = u32_at(list, at)? as i32;
+        c[END] = end_of(list, i.wrapping_add(1), self.frames)? as i32;
+        c[REC_AT] = node.data_at.wrapping_add(off as usize) as i32;
+        c[NEXT] = i.wrapping_add(1) as i32;
+        Some(())
+    }
+}
+
+/// Player-state words per node: where the node is in the database and
+/// the segment it played last (§11.4), so that the next frame reads no
+/// header and searches no list.
+pub(crate) const CURSOR_WORDS: usize = 9;
+/// Cursor words: the segment's start and end frames, its pattern record
+/// and the end of the node's records (offsets in the database's nodes;
+/// `DATA_END` = 0 before the cursors are filled), the node's channel list
+/// and channel count, the segment's number + 1, the node record and its
+/// segment list (offset of its count in the segment lists).
+const START: usize = 0;
+const END: usize = 1;
+const REC_AT: usize = 2;
+const DATA_END: usize = 3;
+const CH_AT: usize = 4;
+const NC: usize = 5;
+const NEXT: usize = 6;
+const NODE_AT: usize = 7;
+const LIST_AT: usize = 8;
+
+/// Where a node record's parts are (§11.2), as offsets in the nodes.
+struct NodeAt {
+    ch_at: usize,
+    nc: usize,
+    off_at: usize,
+    data_at: usize,
+    data_end: usize,
+}
+
+impl NodeAt {
+    fn read(nodes: &[u8], at: usize) -> Option<NodeAt> {
+        let &[c0, c1, p0, p1, d0, d1, d2, d3] = nodes.get(at..)?.first_chunk::<8>()?;
+        let nc = usize::from(u16::from_le_bytes([c0, c1]));
+        let np = usize::from(u16::from_le_bytes([p0, p1]));
+        let d = u32::from_le_bytes([d0, d1, d2, d3]) as usize;
+        let ch_at = at.wrapping_add(8);
+        let off_at = ch_at.wrapping_add(nc.wrapping_mul(2));
+        let data_at = off_at.wrapping_add(np.wrapping_mul(4));
+        Some(NodeAt {
+            ch_at,
+            nc,
+            off_at,
+            data_at,
+            data_end: data_at.wrapping_add(d),
         })
     }
 }
