@@ -16,9 +16,9 @@ use core::num::NonZeroU32;
 /// less room the same values are decoded, more slowly — or the
 /// `predictive` codec's two frames, contexts, probabilities and coder
 /// (`3·C + 19` words; a smaller `N` is refused), or the `pattern` codec's
-/// second frame while `sample_at` mixes two (`C` words), then 4 words per
-/// node, its last segment (with less room the nodes past it search their
-/// segment lists) — so
+/// second frame while `sample_at` mixes two (`C` words), then 9 words per
+/// node, its place in the database and its last segment (with less room
+/// every node searches its segment list each frame) — so
 /// `size_of::<Player<N>>()` is `4·N + 176` bytes on a 32-bit MCU
 /// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.

@@ -47,6 +47,7 @@ fn encode_with(
         metres_per_unit: units::detect(m).metres(),
         key_interval,
         index_layout: Default::default(),
+        pattern_nodes: Vec::new(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

@@ -53,6 +53,7 @@ fn motion_clip_layout(
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
         index_layout,
+        pattern_nodes: Vec::new(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

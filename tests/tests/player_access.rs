@@ -15,6 +15,7 @@ fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
         metres_per_unit: units::detect(&m).metres(),
         key_interval,
         index_layout: Default::default(),
+        pattern_nodes: Vec::new(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }
@@ -132,6 +133,7 @@ fn pca_clip() -> Vec<u8> {
         metres_per_unit: units::detect(&m).metres(),
         key_interval: None,
         index_layout: Default::default(),
+        pattern_nodes: Vec::new(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }
@@ -226,6 +228,7 @@ fn pca_spline_cache_size_does_not_change_output() {
             metres_per_unit: units::detect(&m).metres(),
             key_interval: None,
             index_layout: Default::default(),
+            pattern_nodes: Vec::new(),
         };
         clips.push(("05_04".into(), encode::encode(&m, &opts).unwrap().bytes));
     }

@@ -49,6 +49,7 @@ fn encode_with(
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
         index_layout,
+        pattern_nodes: Vec::new(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

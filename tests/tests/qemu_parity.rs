@@ -45,6 +45,7 @@ fn encode_to(
         metres_per_unit: units::detect(m).metres(),
         key_interval,
         index_layout,
+        pattern_nodes: Vec::new(),
     };
     let bytes = encode::encode(m, &opts).unwrap().bytes;
     std::fs::write(path, &bytes).unwrap();

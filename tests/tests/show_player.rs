@@ -360,3 +360,74 @@ fn pattern_clips_share_one_database() {
         built.singles_bytes()
     );
 }
+
+/// A show file's `pattern_nodes` sets the pattern codec's body-part nodes
+/// (issue: the hierarchy is overridable in the show file): the given nodes
+/// come first in the shared database, the joints in none keep their limbs;
+/// a joint the skeleton lacks is an error that names it.
+#[test]
+fn pattern_nodes_in_the_show_file_set_the_database_nodes() {
+    let d = dir("pattern-nodes");
+    let demo = mocap_tests::workspace_root().join("assets/animatronic_demo.bvh");
+    let show = |nodes: &str| {
+        format!(
+            "[show]\nname = \"p\"\nmax_error = \"1deg\"\ncodec = \"pattern\"\npattern_nodes = {nodes}\n\
+             [[clip]]\nname = \"a\"\nfile = \"{f}\"\nto = \"2s\"\n\
+             [[clip]]\nname = \"b\"\nfile = \"{f}\"\nfrom = \"4s\"\nto = \"6s\"\n",
+            f = demo.display()
+        )
+    };
+    let nodes_of = |toml: &str| {
+        let spec = ShowSpec::parse(toml, "test.toml", &d).unwrap();
+        let built = show::build(&spec).unwrap();
+        let b = &built.bytes;
+        // The container's section table (SPEC.md §2.2): the model section.
+        let count = usize::from(u16::from_le_bytes([b[6], b[7]]));
+        let word = |at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as usize;
+        let e = (0..count)
+            .map(|i| 8 + 12 * i)
+            .find(|&e| word(e) == 0x20)
+            .unwrap();
+        let db = b[word(e + 4)..word(e + 4) + word(e + 8)].to_vec();
+        mocap_encoder::codec::pattern::inspect_database(&db)
+            .unwrap()
+            .nodes
+            .iter()
+            .map(|n| n[0])
+            .collect::<Vec<usize>>()
+    };
+    let default = nodes_of(&show("[]").replace("pattern_nodes = []\n", ""));
+    // Both arms in one node, the head and jaw in another.
+    let given = nodes_of(&show(
+        r#"[["LeftShoulder", "LeftUpperArm", "LeftForeArm", "LeftHand", "RightShoulder", "RightUpperArm", "RightForeArm", "RightHand"], ["Head", "Jaw"]]"#,
+    ));
+    assert_ne!(given, default);
+    assert_eq!(given.iter().sum::<usize>(), default.iter().sum::<usize>());
+    let demo_m = mocap_encoder::bvh::read_file(&demo).unwrap();
+    let chans = |names: &[&str]| {
+        let joint_of = demo_m.skeleton.channel_joints();
+        joint_of
+            .iter()
+            .filter(|&&j| names.contains(&demo_m.skeleton.joints[j].name.as_str()))
+            .count()
+    };
+    assert_eq!(
+        given[0],
+        chans(&[
+            "LeftShoulder",
+            "LeftUpperArm",
+            "LeftForeArm",
+            "LeftHand",
+            "RightShoulder",
+            "RightUpperArm",
+            "RightForeArm",
+            "RightHand"
+        ])
+    );
+    assert_eq!(given[1], chans(&["Head", "Jaw"]));
+    let spec = ShowSpec::parse(&show(r#"[["Head", "Tail"]]"#), "test.toml", &d).unwrap();
+    let err = show::build(&spec).unwrap_err().to_string();
+    assert!(err.contains("'Tail'"), "{err}");
+    let empty = ShowSpec::parse(&show(r#"[["Head"], []]"#), "test.toml", &d).unwrap_err();
+    assert!(empty.to_string().contains("pattern_nodes"), "{empty}");
+}

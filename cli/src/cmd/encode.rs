@@ -62,6 +62,14 @@ pub struct Args {
     /// smaller clip that fits the budget is kept.
     #[arg(long)]
     index_layout: Option<IndexLayout>,
+    /// The `pattern` codec's body-part nodes: joint names, `,` between
+    /// the joints of a node and `;` between nodes, e.g.
+    /// `LeftUpLeg,LeftLeg,LeftFoot,LeftToeBase;RightUpLeg,RightLeg`.
+    /// Joints in no node keep the skeleton's limbs (the default: chains of
+    /// joints between branchings, the root's translations and heading
+    /// together). A show file sets them with `pattern_nodes`.
+    #[arg(long, value_parser = parse_nodes)]
+    pattern_nodes: Option<PatternNodes>,
     /// Also write the clip as a source file beside the output.
     #[arg(long, value_enum)]
     emit: Option<Emit>,
@@ -211,6 +219,7 @@ pub fn run(a: Args) -> super::Result {
         metres_per_unit: unit.metres(),
         key_interval: a.key_interval,
         index_layout: a.index_layout.unwrap_or_default(),
+        pattern_nodes: a.pattern_nodes.clone().map(|n| n.0).unwrap_or_default(),
     };
     let enc = match chip {
         None => {
@@ -419,4 +428,28 @@ fn emit_source(kind: Emit, output: &Path, bytes: &[u8]) -> super::Result<PathBuf
     let path = output.with_extension(ext);
     write(&path, text.as_bytes())?;
     Ok(path)
+}
+
+/// `--pattern-nodes`' value: the nodes' joint names.
+#[derive(Clone, Debug)]
+struct PatternNodes(Vec<Vec<String>>);
+
+/// `--pattern-nodes`: nodes split by `;`, joint names by `,`.
+fn parse_nodes(s: &str) -> Result<PatternNodes, String> {
+    let nodes: Vec<Vec<String>> = s
+        .split(';')
+        .map(|n| {
+            n.split(',')
+                .map(str::trim)
+                .filter(|j| !j.is_empty())
+                .map(String::from)
+                .collect()
+        })
+        .collect();
+    if nodes.is_empty() || nodes.iter().any(Vec::is_empty) {
+        return Err(format!(
+            "'{s}': give nodes as joint names, `,` between joints and `;` between nodes (no empty node)"
+        ));
+    }
+    Ok(PatternNodes(nodes))
 }

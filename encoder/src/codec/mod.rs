@@ -111,6 +111,26 @@ pub enum CodecError {
         /// Patterns of the node.
         patterns: usize,
     },
+    /// A body-part node names a joint the skeleton does not have.
+    #[error("pattern codec: node {node} names joint '{joint}', which the skeleton does not have (its joints: {known})")]
+    PatternNodeJoint {
+        /// The node (0-based, in the order given).
+        node: usize,
+        /// The name given.
+        joint: String,
+        /// The skeleton's joints with channels.
+        known: String,
+    },
+    /// A joint is in two body-part nodes.
+    #[error("pattern codec: joint '{joint}' is in nodes {first} and {second}")]
+    PatternNodeTwice {
+        /// The joint.
+        joint: String,
+        /// The nodes (0-based).
+        first: usize,
+        /// The second node.
+        second: usize,
+    },
 }
 
 /// The lines `mocap info` prints under a codec section (`None` for other

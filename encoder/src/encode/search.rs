@@ -31,7 +31,7 @@ fn attempt(
 ) -> Result<Attempt, EncodeError> {
     let fixed = &input.fixed;
     if opts.codec == CodecChoice::Pattern {
-        let nodes = pattern::nodes(m);
+        let nodes = pattern::nodes_with(m, &opts.pattern_nodes)?;
         let accept = pattern::accept_for(&opts.bound);
         let enc = pattern::encode(&fixed.values, tol, accept, &nodes, 1.0 / m.frame_time)?;
         let expected = FixedChannels {
@@ -390,6 +390,7 @@ mod tests {
                 metres_per_unit: crate::units::detect(&m).metres(),
                 key_interval: None,
                 index_layout: Default::default(),
+                pattern_nodes: Vec::new(),
             };
             let e = encode(&m, &opts).unwrap_or_else(|e| panic!("{codec:?}: {e}"));
             assert!(e.metrics.arms_mm <= 5.0, "{codec:?}");

@@ -144,6 +144,9 @@ pub struct ShowSpec {
     pub idle: Vec<String>,
     /// Triggers.
     pub triggers: Vec<TriggerSpec>,
+    /// The `pattern` codec's body-part nodes, each a list of joint names
+    /// (`pattern_nodes`; empty: the skeleton's limbs).
+    pub pattern_nodes: Vec<Vec<String>>,
 }
 
 #[derive(Deserialize)]
@@ -170,6 +173,7 @@ struct RawShow {
     seed: Option<Spanned<u32>>,
     #[serde(default)]
     idle: Vec<Spanned<String>>,
+    pattern_nodes: Option<Spanned<Vec<Vec<String>>>>,
 }
 
 #[derive(Deserialize)]
@@ -643,9 +647,24 @@ impl ShowSpec {
                 pos: pos(span),
             });
         }
+        let pattern_nodes = match &show.pattern_nodes {
+            None => Vec::new(),
+            Some(n) => {
+                let nodes = n.get_ref().clone();
+                if nodes.iter().any(|node| node.is_empty()) || nodes.len() > 255 {
+                    return Err(at(
+                        n.span(),
+                        "`pattern_nodes` lists 1 to 255 nodes, each a list of one or more joint names"
+                            .into(),
+                    ));
+                }
+                nodes
+            }
+        };
         Ok(ShowSpec {
             file: file.to_string(),
             name,
+            pattern_nodes,
             rig,
             fade_ms: show
                 .fade_ms

@@ -269,13 +269,17 @@ pub fn build_with<'a>(
             continue;
         }
         let p = progress(k, spec.clips.len(), &c.name);
+        let source = Source {
+            motion: &cut,
+            range,
+            frame_time: m.frame_time,
+            declared: unit,
+        };
         singles.push(Some(encode_one(
             c,
-            &cut,
+            source,
             rig.as_ref(),
-            range,
-            m.frame_time,
-            unit,
+            &spec.pattern_nodes,
             p.as_ref(),
         )?));
     }
@@ -303,6 +307,7 @@ pub fn build_with<'a>(
             metres_per_unit: metres[0],
             key_interval: None,
             index_layout: Default::default(),
+            pattern_nodes: spec.pattern_nodes.clone(),
         };
         let shared = encode::encode_pattern_shared(&motions, &metres, &opts, p.as_ref()).map_err(
             |source| ShowError::Encode {
@@ -397,15 +402,28 @@ fn cut(m: &Motion, (from, to): (usize, usize)) -> Motion {
     }
 }
 
+/// A clip's motion as cut from its source: the source's frames `range`
+/// at its frame time, and the length unit the source declares.
+struct Source<'m> {
+    motion: &'m Motion,
+    range: (usize, usize),
+    frame_time: f64,
+    declared: Option<LengthUnit>,
+}
+
 fn encode_one(
     c: &ClipSpec,
-    m: &Motion,
+    source: Source<'_>,
     rig: Option<&Rig>,
-    range: (usize, usize),
-    source_frame_time: f64,
-    declared: Option<LengthUnit>,
+    pattern_nodes: &[Vec<String>],
     progress: &dyn encode::Progress,
 ) -> Result<Single, ShowError> {
+    let Source {
+        motion: m,
+        range,
+        frame_time: source_frame_time,
+        declared,
+    } = source;
     let unit = c.units.or(declared).unwrap_or_else(|| units::detect(m));
     let file = c.file.display().to_string();
     if let Some(rig) = rig {
@@ -451,6 +469,7 @@ fn encode_one(
             metres_per_unit: unit.metres(),
             key_interval: None,
             index_layout: Default::default(),
+            pattern_nodes: pattern_nodes.to_vec(),
         },
         progress,
     )

@@ -112,6 +112,7 @@ mod tests {
                     metres_per_unit: crate::units::detect(&m).metres(),
                     key_interval: None,
                     index_layout,
+                    pattern_nodes: Vec::new(),
                 };
                 (candidate_label(codec, index_layout), encode(&m, &opts))
             })

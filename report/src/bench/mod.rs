@@ -209,6 +209,7 @@ impl Source {
             metres_per_unit: self.metres_per_unit,
             key_interval: None,
             index_layout: Default::default(),
+            pattern_nodes: Vec::new(),
         };
         let t = Instant::now();
         let enc = match &self.markers {

@@ -7,11 +7,13 @@
 //! the codec section, or in a show's shared model section (§9.2) that
 //! every clip of the show reads.
 //!
-//! Every frame is decoded directly (no history): per node, a binary search
-//! over its segments' start frames, the frame's position in the pattern
-//! (two integer divisions) and the four weights of a uniform Catmull-Rom
-//! curve there, then per channel four codes, weighed and scaled. No state
-//! beyond the output.
+//! Every frame is decoded directly (no history): per node its segment, the
+//! frame's position in the pattern (two integer divisions) and the four
+//! weights of a uniform Catmull-Rom curve there, then per channel four
+//! codes, weighed and scaled. The player keeps a cursor per node (its place
+//! in the database and its last segment, [`CURSOR_WORDS`] words) so that
+//! the next frame needs no search; without one, a binary search over the
+//! segments' start frames finds the same segment.
 
 mod columns;
 mod rows;

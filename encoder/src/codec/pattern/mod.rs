@@ -52,6 +52,70 @@ pub fn nodes(m: &crate::motion::Motion) -> Vec<Vec<usize>> {
     out
 }
 
+/// The body-part nodes with `given` nodes first, each a list of joint
+/// names (a show file's `pattern_nodes`, `mocap encode --pattern-nodes`):
+/// each given node holds its joints' channels, and the channels of the
+/// joints in none keep [`nodes`]' limbs (less the given joints). Joint
+/// names match exactly, else ignoring case. Empty `given`: [`nodes`].
+pub fn nodes_with(
+    m: &crate::motion::Motion,
+    given: &[Vec<String>],
+) -> Result<Vec<Vec<usize>>, CodecError> {
+    if given.is_empty() {
+        return Ok(nodes(m));
+    }
+    let joints = &m.skeleton.joints;
+    let joint_of = m.skeleton.channel_joints();
+    let has_channels = |j: usize| joint_of.contains(&j);
+    let find = |name: &str| {
+        let named = |f: &dyn Fn(&str) -> bool| {
+            (0..joints.len()).find(|&j| has_channels(j) && f(&joints[j].name))
+        };
+        named(&|n| n == name).or_else(|| named(&|n| n.eq_ignore_ascii_case(name)))
+    };
+    let mut node_of_joint: Vec<Option<usize>> = vec![None; joints.len()];
+    for (k, names) in given.iter().enumerate() {
+        for name in names {
+            let j = find(name).ok_or_else(|| CodecError::PatternNodeJoint {
+                node: k,
+                joint: name.clone(),
+                known: (0..joints.len())
+                    .filter(|&j| has_channels(j))
+                    .map(|j| joints[j].name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })?;
+            match node_of_joint[j] {
+                Some(first) if first != k => {
+                    return Err(CodecError::PatternNodeTwice {
+                        joint: joints[j].name.clone(),
+                        first,
+                        second: k,
+                    })
+                }
+                _ => node_of_joint[j] = Some(k),
+            }
+        }
+    }
+    let mut out: Vec<Vec<usize>> = vec![Vec::new(); given.len()];
+    for (c, &j) in joint_of.iter().enumerate() {
+        if let Some(k) = node_of_joint[j] {
+            out[k].push(c);
+        }
+    }
+    for limb in nodes(m) {
+        let rest: Vec<usize> = limb
+            .into_iter()
+            .filter(|&c| node_of_joint[joint_of[c]].is_none())
+            .collect();
+        if !rest.is_empty() {
+            out.push(rest);
+        }
+    }
+    out.retain(|n| !n.is_empty());
+    Ok(out)
+}
+
 /// How close a segment must be to its pattern under `bound`: strict under
 /// an angle bound (every value within its tolerance), relaxed under a
 /// bound on joint positions alone ([`Accept::POSITIONAL`]).
