@@ -311,6 +311,11 @@ pub struct SectionInfo {
     pub database_len: usize,
     /// Its records' layout (§11.2): 0 rows, 1 columns.
     pub layout: u8,
+    /// Layout 1: bytes of the codes.
+    pub code_bytes: usize,
+    /// Layout 1: bytes the codes would take bit-packed, each channel of a
+    /// pattern at its largest code's bit length.
+    pub packed_bytes: usize,
 }
 
 /// Reads the sizes of a `pattern` section (`None` if it does not parse,
@@ -345,13 +350,21 @@ pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
     let n = usize::from(*db.first()?);
     let mut at = 2;
     let mut nodes = Vec::new();
+    let (mut code_bytes, mut packed_bits) = (0usize, 0usize);
     for _ in 0..n {
         let (nc, patterns, data) = (u16_at(at)?, u16_at(at + 2)?, u32_at(at + 4)?);
         let offsets = at + 8 + nc * 2;
         let data_at = offsets + patterns * 4;
         let mut samples = 0;
         for p in 0..patterns {
-            samples += u16_at(data_at + u32_at(offsets + p * 4)?)? * nc;
+            let rec = data_at + u32_at(offsets + p * 4)?;
+            let len = u16_at(rec)?;
+            samples += len * nc;
+            if db.get(1) == Some(&mocap_decoder::pattern::LAYOUT_COLUMNS) {
+                let (c, b) = column_code_sizes(db.get(rec + 2..)?, nc, len)?;
+                code_bytes += c;
+                packed_bits += b;
+            }
         }
         let end = data_at + data;
         nodes.push([nc, 0, patterns, samples, end - at]);
@@ -361,7 +374,40 @@ pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
         nodes,
         database_len: at,
         layout: *db.get(1)?,
+        code_bytes,
+        packed_bytes: packed_bits.div_ceil(8),
     })
+}
+
+/// A layout-1 record's channels (SPEC.md §11.3b; `rec` from its first
+/// head on): the bytes of their codes, and the bits the codes would take
+/// each at its channel's bit width in this pattern (the largest code's
+/// bit length) — what bit-packed columns would store.
+fn column_code_sizes(rec: &[u8], nc: usize, len: usize) -> Option<(usize, usize)> {
+    let (mut at, mut bytes, mut bits) = (0usize, 0usize, 0usize);
+    for _ in 0..nc {
+        let h = *rec.get(at)?;
+        let w = [0usize, 1, 2, 4][usize::from(h >> 5 & 3)];
+        at += if h & mocap_decoder::pattern::HEAD_WIDE_BASE == 0 {
+            3
+        } else {
+            5
+        };
+        let codes = rec.get(at..at + len * w)?;
+        let largest = (0..len)
+            .map(|k| {
+                codes[k * w..k * w + w]
+                    .iter()
+                    .rev()
+                    .fold(0u32, |v, &b| v << 8 | u32::from(b))
+            })
+            .max()
+            .unwrap_or(0);
+        bytes += len * w;
+        bits += len * (32 - largest.leading_zeros() as usize);
+        at += len * w;
+    }
+    Some((bytes, bits))
 }
 
 impl SectionInfo {
@@ -377,6 +423,12 @@ impl SectionInfo {
             self.database_len,
             if self.layout == 0 { "rows" } else { "columns" }
         );
+        if self.code_bytes > 0 {
+            s += &format!(
+                "  codes: {} B; bit-packed at each pattern's channel widths they would take {} B\n",
+                self.code_bytes, self.packed_bytes
+            );
+        }
         for (i, n) in self.nodes.iter().enumerate() {
             s += &format!(
                 "  node {i}: {} channels, {} segments, {} patterns, {} samples, {} B\n",
