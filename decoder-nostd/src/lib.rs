@@ -87,7 +87,7 @@ pub mod pca_spline_cache {
 pub mod pattern {
     pub use crate::codec::pattern::{
         interpolate, position, taps, weights, window, FLAG_SHARED, HEAD_WIDE_BASE, LAYOUT_COLUMNS,
-        LAYOUT_ROWS, MAX_NODES, MAX_SEGMENT,
+        LAYOUT_PACKED, LAYOUT_ROWS, MAX_NODES, MAX_SEGMENT, PACKED_TAIL, WIDE_BASE_2,
     };
 }
 

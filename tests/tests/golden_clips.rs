@@ -342,22 +342,26 @@ fn pre_digest_servo_clips_keep_decoding() {
     }
 }
 
-/// A `pattern` clip as the encoder wrote it before layout 1 (SPEC.md §11.2:
-/// a `u16` node count, records in rows, §11.3), kept as committed
-/// (`tests/golden/pre-columns/`): it still decodes to exactly its committed
-/// output.
+/// `pattern` clips as the encoder wrote them before its current layout,
+/// kept as committed: `tests/golden/pre-columns/` (layout 0, SPEC.md
+/// §11.3: a `u16` node count, records in rows) and `tests/golden/pre-packed/`
+/// (layout 1, §11.3b: columns of whole-byte codes). They still decode to
+/// exactly their committed output.
 #[test]
-fn pre_columns_pattern_clip_keeps_decoding() {
-    let dir = golden_dir().join("pre-columns");
-    let name = "pattern_demo_20mm";
-    let bytes = std::fs::read(dir.join(format!("{name}.mcb"))).unwrap();
-    let expected = std::fs::read_to_string(dir.join(format!("{name}.out"))).unwrap();
-    let actual = decoded_report(&bytes);
-    assert!(
-        expected == actual,
-        "pre-columns {name}: the decoder's output changed:\n{}",
-        diff(&expected, &actual)
-    );
+fn earlier_pattern_layouts_keep_decoding() {
+    for dir in ["pre-columns", "pre-packed"] {
+        let dir = golden_dir().join(dir);
+        let name = "pattern_demo_20mm";
+        let bytes = std::fs::read(dir.join(format!("{name}.mcb"))).unwrap();
+        let expected = std::fs::read_to_string(dir.join(format!("{name}.out"))).unwrap();
+        let actual = decoded_report(&bytes);
+        assert!(
+            expected == actual,
+            "{}: the decoder's output changed:\n{}",
+            dir.display(),
+            diff(&expected, &actual)
+        );
+    }
 }
 
 /// Clips encoded from the corpus, pinned by digests of their bytes and of

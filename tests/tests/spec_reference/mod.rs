@@ -1117,12 +1117,17 @@ impl Pattern {
         let n = db.u8() as usize;
         let layout = db.u8();
         assert!(n >= 1, "node count");
-        assert!(layout <= 1, "layout");
+        assert!(layout <= 2, "layout");
         let mut nodes = Vec::new();
         let mut seen = vec![0; channels];
         for _ in 0..n {
             let (c, p, d) = (u16(db) as usize, u16(db) as usize, u32(db) as usize);
             let list: Vec<usize> = (0..c).map(|_| u16(db) as usize).collect();
+            let shifts: Vec<u32> = if layout == 2 {
+                (0..c).map(|_| u32::from(db.u8())).collect()
+            } else {
+                Vec::new()
+            };
             assert!(list.windows(2).all(|w| w[0] < w[1]), "channels increase");
             for &ch in &list {
                 seen[ch] += 1;
@@ -1135,6 +1140,9 @@ impl Pattern {
                     let mut q = Reader::new(&data[o..]);
                     if layout == 1 {
                         return columns(&mut q, c);
+                    }
+                    if layout == 2 {
+                        return packed(&mut q, &shifts);
                     }
                     let len = u32::from(u16(&mut q));
                     let row = u16(&mut q) as usize;
@@ -1261,6 +1269,41 @@ fn columns(q: &mut Reader<'_>, c: usize) -> PatternRecord {
             .map(|_| (0..width).fold(0u32, |v, i| v | u32::from(q.u8()) << (8 * i)))
             .collect();
         heads.push((u32::from(h & 31), width, base));
+        by_channel.push(codes);
+    }
+    let codes = (0..len as usize)
+        .map(|k| by_channel.iter().map(|col| col[k]).collect())
+        .collect();
+    PatternRecord {
+        len,
+        heads,
+        codes,
+        steps: true,
+    }
+}
+
+/// §11.3c: a layout-2 record, each channel its head (width in bits, wide
+/// base), its base and its `L` codes bit-packed LSB first; the shifts are
+/// the node's.
+fn packed(q: &mut Reader<'_>, shifts: &[u32]) -> PatternRecord {
+    let len = u32::from(u16::from_le_bytes([q.u8(), q.u8()]));
+    let mut heads = Vec::new();
+    let mut by_channel = Vec::new();
+    for &shift in shifts {
+        let h = q.u8();
+        assert_eq!(h & 0x80, 0, "head bit 7");
+        let base = if h & 0x40 == 0 {
+            i32::from(i16::from_le_bytes([q.u8(), q.u8()]))
+        } else {
+            i32::from_le_bytes([q.u8(), q.u8(), q.u8(), q.u8()])
+        };
+        let b = usize::from(h & 63);
+        let column = q.take((len as usize * b).div_ceil(8));
+        let bit = |i: usize| u32::from(column[i / 8] >> (i % 8) & 1);
+        let codes: Vec<u32> = (0..len as usize)
+            .map(|k| (0..b).fold(0u32, |v, i| v | bit(k * b + i) << i))
+            .collect();
+        heads.push((shift, b, base));
         by_channel.push(codes);
     }
     let codes = (0..len as usize)

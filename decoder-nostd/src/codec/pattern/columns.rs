@@ -11,12 +11,12 @@ use super::{position, u16_at, window, HEAD_WIDE_BASE, WEIGHT_BITS};
 
 /// Where a node's values go, one after the other: consecutive outputs,
 /// or the node's channel numbers. The loops run until it has no more.
-trait Sink {
+pub(super) trait Sink {
     fn slot(&mut self) -> Option<&mut i32>;
 }
 
 /// A node's channels `first … first + C − 1`: its part of the output.
-struct Run<'o>(core::slice::IterMut<'o, i32>);
+pub(super) struct Run<'o>(pub(super) core::slice::IterMut<'o, i32>);
 
 impl Sink for Run<'_> {
     #[inline(always)]
@@ -26,9 +26,9 @@ impl Sink for Run<'_> {
 }
 
 /// Any channels: the output and the node's channel numbers.
-struct Scatter<'o, 'c> {
-    out: &'o mut [i32],
-    channels: core::slice::Iter<'c, [u8; 2]>,
+pub(super) struct Scatter<'o, 'c> {
+    pub(super) out: &'o mut [i32],
+    pub(super) channels: core::slice::Iter<'c, [u8; 2]>,
 }
 
 impl Sink for Scatter<'_, '_> {
@@ -173,18 +173,18 @@ pub(super) fn split_head(rest: &[u8]) -> Option<(i32, u8, &[u8])> {
 
 /// A value: `(base + code) << shift`, wrapping (§11.3b).
 #[inline(always)]
-fn steps(base: i32, head: u8, code: i32) -> i32 {
+pub(super) fn steps(base: i32, head: u8, code: i32) -> i32 {
     base.wrapping_add(code).wrapping_shl(u32::from(head & 31))
 }
 
 /// `(acc + 2048) >> 12` of an exact 64-bit sum of weighed codes.
 #[inline(always)]
-fn round(acc: i64) -> i32 {
+pub(super) fn round(acc: i64) -> i32 {
     (acc.wrapping_add(1 << (WEIGHT_BITS - 1)) >> WEIGHT_BITS) as i32
 }
 
 /// `(acc + 2048) >> 12` of a sum exact in 32 bits.
 #[inline(always)]
-fn round32(acc: i32) -> i32 {
+pub(super) fn round32(acc: i32) -> i32 {
     acc.wrapping_add(1 << (WEIGHT_BITS - 1)) >> WEIGHT_BITS
 }

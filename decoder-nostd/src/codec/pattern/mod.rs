@@ -16,6 +16,7 @@
 //! segments' start frames finds the same segment.
 
 mod columns;
+mod packed;
 mod rows;
 
 use crate::error::Error;
@@ -38,6 +39,16 @@ pub const LAYOUT_ROWS: u8 = 0;
 pub const LAYOUT_COLUMNS: u8 = 1;
 /// Head bit 7 in layout 1: the channel's base is an `i32` (else an `i16`).
 pub const HEAD_WIDE_BASE: u8 = 0x80;
+/// Record layout 2 (§11.3c): layout 1 with each channel's codes
+/// bit-packed at the pattern's width (0 … 32 bits), the channels' shifts
+/// once per node.
+pub const LAYOUT_PACKED: u8 = 2;
+/// Head bit 6 in layout 2: the channel's base is an `i32` (else an `i16`);
+/// bits 0–5 are the code width in bits.
+pub const WIDE_BASE_2: u8 = 0x40;
+/// Bytes a node's records end with in layout 2, so that a code's four
+/// bytes from its first are always there.
+pub const PACKED_TAIL: usize = 3;
 
 /// A validated view of a `pattern` codec section and its database.
 #[derive(Clone, Copy, Debug)]
@@ -56,6 +67,8 @@ pub(crate) struct PatternCodec<'a> {
 #[derive(Clone, Copy)]
 struct Node<'a> {
     channels: &'a [u8],
+    /// Layout 2: the channels' shifts.
+    shifts: &'a [u8],
     offsets: &'a [u8],
     data: &'a [u8],
     pattern_count: usize,
@@ -83,12 +96,19 @@ fn u32_at(b: &[u8], at: usize) -> Option<u32> {
 }
 
 /// Reads the database node record at the start of `r` (§11.2).
-fn read_node<'a>(r: &mut Reader<'a>) -> Option<Node<'a>> {
+fn read_node<'a>(r: &mut Reader<'a>, layout: u8) -> Option<Node<'a>> {
     let nc = usize::from(r.u16_le()?);
     let pattern_count = usize::from(r.u16_le()?);
     let data_len = usize::try_from(r.u32_le()?).ok()?;
+    let channels = r.take(nc.checked_mul(2)?)?;
+    let shifts = if layout == LAYOUT_PACKED {
+        r.take(nc)?
+    } else {
+        &[]
+    };
     Some(Node {
-        channels: r.take(nc.checked_mul(2)?)?,
+        channels,
+        shifts,
         offsets: r.take(pattern_count.checked_mul(4)?)?,
         data: r.take(data_len)?,
         pattern_count,
@@ -283,7 +303,7 @@ impl<'a> PatternCodec<'a> {
         let mut r = Reader::new(nodes);
         let mut s = Reader::new(segments);
         for _ in 0..node_count {
-            let node = read_node(&mut r).ok_or(malformed("database truncated"))?;
+            let node = read_node(&mut r, layout).ok_or(malformed("database truncated"))?;
             let (n, list) = read_segments(&mut s).ok_or(malformed("segment list truncated"))?;
             check_segments(n, list, node.pattern_count, frames)?;
         }
@@ -357,7 +377,7 @@ impl<'a> PatternCodec<'a> {
         s: usize,
         c: &mut [i32; CURSOR_WORDS],
     ) -> Option<(usize, usize)> {
-        let node = NodeAt::read(self.nodes, at)?;
+        let node = NodeAt::read(self.nodes, at, self.layout)?;
         let count = usize::from(u16_at(self.segments, s)?);
         *c = [0; CURSOR_WORDS];
         c[DATA_END] = node.data_end as i32;
@@ -377,17 +397,18 @@ impl<'a> PatternCodec<'a> {
             self.advance(c, f)?;
         }
         let [start, end, rec_at, data_end, ch_at, nc, ..] = c.map(|w| w as u32 as usize);
-        let channels = self
-            .nodes
-            .get(ch_at..ch_at.wrapping_add(nc.wrapping_mul(2)))?;
-        let channels = channels.as_chunks::<2>().0;
+        let ch_end = ch_at.wrapping_add(nc.wrapping_mul(2));
+        let channels = self.nodes.get(ch_at..ch_end)?.as_chunks::<2>().0;
         let rec = self.nodes.get(rec_at..data_end)?;
         let t = f.wrapping_sub(start as u32);
         let n = end.wrapping_sub(start) as u32;
-        if self.layout == LAYOUT_COLUMNS {
-            columns::play(rec, channels, t, n, out)
-        } else {
-            rows::play(rec, channels, t, n, out)
+        match self.layout {
+            LAYOUT_PACKED => {
+                let shifts = self.nodes.get(ch_end..ch_end.wrapping_add(nc))?;
+                packed::play(rec, channels, shifts, t, n, out)
+            }
+            LAYOUT_COLUMNS => columns::play(rec, channels, t, n, out),
+            _ => rows::play(rec, channels, t, n, out),
         }
     }
 
@@ -395,7 +416,7 @@ impl<'a> PatternCodec<'a> {
     /// found by a binary search over the starts (§11.4).
     #[inline(never)]
     fn advance(&self, c: &mut [i32; CURSOR_WORDS], f: u32) -> Option<()> {
-        let node = NodeAt::read(self.nodes, c[NODE_AT] as u32 as usize)?;
+        let node = NodeAt::read(self.nodes, c[NODE_AT] as u32 as usize, self.layout)?;
         let s = c[LIST_AT] as u32 as usize;
         let count = usize::from(u16_at(self.segments, s)?);
         let list_at = s.wrapping_add(2);
@@ -464,13 +485,14 @@ struct NodeAt {
 }
 
 impl NodeAt {
-    fn read(nodes: &[u8], at: usize) -> Option<NodeAt> {
+    fn read(nodes: &[u8], at: usize, layout: u8) -> Option<NodeAt> {
         let &[c0, c1, p0, p1, d0, d1, d2, d3] = nodes.get(at..)?.first_chunk::<8>()?;
         let nc = usize::from(u16::from_le_bytes([c0, c1]));
         let np = usize::from(u16::from_le_bytes([p0, p1]));
         let d = u32::from_le_bytes([d0, d1, d2, d3]) as usize;
         let ch_at = at.wrapping_add(8);
-        let off_at = ch_at.wrapping_add(nc.wrapping_mul(2));
+        let shifts = if layout == LAYOUT_PACKED { nc } else { 0 };
+        let off_at = ch_at.wrapping_add(nc.wrapping_mul(2)).wrapping_add(shifts);
         let data_at = off_at.wrapping_add(np.wrapping_mul(4));
         Some(NodeAt {
             ch_at,
@@ -504,12 +526,12 @@ fn check_database(db: &[u8], channels: usize) -> Result<(usize, u8, &[u8], usize
     if node_count == 0 {
         return Err(malformed("node count not in 1..=255"));
     }
-    if layout > LAYOUT_COLUMNS {
+    if layout > LAYOUT_PACKED {
         return Err(malformed("an unknown record layout"));
     }
     let mut total = 0usize;
     for _ in 0..node_count {
-        let node = read_node(&mut r).ok_or(malformed("database truncated"))?;
+        let node = read_node(&mut r, layout).ok_or(malformed("database truncated"))?;
         check_node(&node, layout)?;
         total = total.wrapping_add(node.channel_count());
     }
@@ -517,7 +539,7 @@ fn check_database(db: &[u8], channels: usize) -> Result<(usize, u8, &[u8], usize
     if total != channels {
         return Err(malformed("the nodes' channels are not the header's"));
     }
-    check_cover(nodes, node_count, channels)?;
+    check_cover(nodes, node_count, channels, layout)?;
     Ok((node_count, layout, nodes, r.pos()))
 }
 
@@ -559,6 +581,9 @@ fn check_node(node: &Node<'_>, layout: u8) -> Result<(), Error> {
     if nc == 0 || node.pattern_count == 0 {
         return Err(malformed("a node without channels or patterns"));
     }
+    if node.shifts.iter().any(|&sh| sh > 31) {
+        return Err(malformed("a shift over 31"));
+    }
     let mut prev = None;
     for c in node.channels.as_chunks::<2>().0 {
         let c = u16::from_le_bytes(*c);
@@ -575,6 +600,10 @@ fn check_node(node: &Node<'_>, layout: u8) -> Result<(), Error> {
             .ok_or(malformed("a pattern offset past the node's data"))?;
         if layout == LAYOUT_COLUMNS {
             check_columns(rec, nc)?;
+            continue;
+        }
+        if layout == LAYOUT_PACKED {
+            check_packed(rec, nc)?;
             continue;
         }
         let rows::Record {
@@ -618,16 +647,50 @@ fn check_columns(rec: &[u8], nc: usize) -> Result<(), Error> {
     Ok(())
 }
 
+/// The rules of a layout-2 record (§11.3c) of `nc` channels at the start
+/// of `rec` (the node's records from it on): samples, every channel's
+/// head, base and codes, and the node's 3 closing bytes after it.
+fn check_packed(rec: &[u8], nc: usize) -> Result<(), Error> {
+    let malformed = |rule| Error::PatternMalformed { rule };
+    let len = usize::from(u16_at(rec, 0).ok_or(malformed("pattern truncated"))?);
+    if len == 0 {
+        return Err(malformed("a pattern without samples"));
+    }
+    let mut rest = rec.get(2..).unwrap_or(&[]);
+    for _ in 0..nc {
+        let (&h, r) = rest.split_first().ok_or(malformed("pattern truncated"))?;
+        if h & 0x80 != 0 || h & 63 > 32 {
+            return Err(malformed(
+                "a channel head with bit 7 set or a width over 32 bits",
+            ));
+        }
+        let base = if h & WIDE_BASE_2 == 0 { 2 } else { 4 };
+        let bytes = len
+            .checked_mul(usize::from(h & 63))
+            .and_then(|b| b.checked_add(7))
+            .map(|b| b >> 3)
+            .and_then(|b| b.checked_add(base))
+            .ok_or(malformed("pattern truncated"))?;
+        rest = r.get(bytes..).ok_or(malformed("pattern truncated"))?;
+    }
+    if rest.len() < PACKED_TAIL {
+        return Err(malformed(
+            "a node's records do not end with 3 bytes after the last code",
+        ));
+    }
+    Ok(())
+}
+
 /// Every channel `0..channels` is in exactly one node: each node's list is
 /// increasing, so a binary search per node and channel counts where it is
 /// (no memory beyond the stack frame; `O(channels · nodes · log)` once).
-fn check_cover(nodes: &[u8], node_count: usize, channels: usize) -> Result<(), Error> {
+fn check_cover(nodes: &[u8], node_count: usize, channels: usize, layout: u8) -> Result<(), Error> {
     let malformed = |rule| Error::PatternMalformed { rule };
     for c in 0..channels {
         let mut found = 0u32;
         let mut r = Reader::new(nodes);
         for _ in 0..node_count {
-            let node = read_node(&mut r).ok_or(malformed("database truncated"))?;
+            let node = read_node(&mut r, layout).ok_or(malformed("database truncated"))?;
             if node
                 .channels
                 .as_chunks::<2>()
@@ -768,10 +831,61 @@ mod tests {
             b[at] = v;
             b
         };
-        assert_eq!(rule(&with(2, 2), None, 2, 6), "an unknown record layout");
+        assert_eq!(rule(&with(2, 3), None, 2, 6), "an unknown record layout");
         assert_eq!(rule(&with(1, 0), None, 2, 6), "node count not in 1..=255");
         // Pattern 1's Zrotation with a 4-byte code: past the node's data.
         assert_eq!(rule(&with(47, 0x60), None, 2, 6), "pattern truncated");
+    }
+
+    /// SPEC.md §7.9's section: §7.7's clip in layout 2 (bit-packed).
+    const PACKED: [u8; 67] = [
+        0x00, 0x01, 0x02, 0x02, 0x00, 0x02, 0x00, 0x1c, 0x00, 0x00, 0x00, 0x00, 0x00, 0x01, 0x00,
+        0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x0f, 0x00, 0x00, 0x00, 0x03, 0x00, 0x08, 0xfa, 0x00,
+        0x00, 0x64, 0xc8, 0x0a, 0x0c, 0xfe, 0x00, 0xd0, 0x87, 0x3e, 0x01, 0x00, 0x40, 0xf4, 0x01,
+        0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+        0x00, 0x05, 0x00, 0x00, 0x00, 0x01, 0x00,
+    ];
+
+    #[test]
+    fn the_packed_section_plays_and_its_rules_are_named() {
+        let codec = PatternCodec::parse(&PACKED, None, 2, 6).unwrap();
+        let expected = [
+            [1000, -500],
+            [1200, -250],
+            [1400, 0],
+            [1600, 250],
+            [1800, 500],
+            [2000, 0],
+        ];
+        for (f, want) in expected.iter().enumerate() {
+            let mut out = [0i32; 2];
+            codec.decode_frame(f as u32, &mut out).unwrap();
+            assert_eq!(&out, want, "frame {f}");
+        }
+        let with = |at: usize, v: u8| {
+            let mut b = PACKED.to_vec();
+            b[at] = v;
+            b
+        };
+        assert_eq!(rule(&with(2, 3), None, 2, 6), "an unknown record layout");
+        assert_eq!(rule(&with(15, 32), None, 2, 6), "a shift over 31");
+        assert_eq!(
+            rule(&with(27, 0x88), None, 2, 6),
+            "a channel head with bit 7 set or a width over 32 bits"
+        );
+        assert_eq!(
+            rule(&with(27, 33), None, 2, 6),
+            "a channel head with bit 7 set or a width over 32 bits"
+        );
+        // Zrotation of pattern 1 at 32 bits: its code runs past the node's
+        // records.
+        assert_eq!(rule(&with(47, 32), None, 2, 6), "pattern truncated");
+        // Zrotation of pattern 1 at 16 bits: its 2 bytes eat the closing
+        // bytes, fewer than 3 are left.
+        assert_eq!(
+            rule(&with(47, 16), None, 2, 6),
+            "a node's records do not end with 3 bytes after the last code"
+        );
     }
 
     /// The window's weights are taps()' weights added up per sample: the

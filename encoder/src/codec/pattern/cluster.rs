@@ -5,7 +5,7 @@
 //! every member within the channels' tolerances — a member that its group's
 //! pattern cannot carry becomes a pattern of its own, which always can.
 
-use mocap_decoder::pattern::{interpolate, position, taps, HEAD_WIDE_BASE};
+use mocap_decoder::pattern::{interpolate, position, taps, WIDE_BASE_2};
 
 /// One node's motion: its channels' values and tolerances.
 pub struct NodeInput<'a> {
@@ -65,27 +65,34 @@ impl Pattern {
         interpolate(base, 0, t.map(|i| codes[i as usize]), w).wrapping_shl(u32::from(shift))
     }
 
-    /// Its record in the section (§11.3b, layout 1): sample count, then
-    /// per channel its head, its base (`i16` where it fits) and its codes.
+    /// Its record in the section (§11.3c, layout 2): sample count, then
+    /// per channel its head (code width in bits, wide-base flag), its base
+    /// (`i16` where it fits) and its codes bit-packed, LSB first.
     pub fn record(&self) -> Vec<u8> {
         let mut out = (self.len as u16).to_le_bytes().to_vec();
-        for (codes, &(base, shift, width)) in self.codes.iter().zip(&self.heads) {
-            let code = match width {
-                0 => 0,
-                1 => 1,
-                2 => 2,
-                _ => 3,
-            };
+        for (codes, &(base, _, _)) in self.codes.iter().zip(&self.heads) {
+            let bits = codes
+                .iter()
+                .map(|&c| 32 - c.leading_zeros())
+                .max()
+                .unwrap_or(0);
             let narrow = i16::try_from(base).ok();
-            let wide = if narrow.is_some() { 0 } else { HEAD_WIDE_BASE };
-            out.push(shift | code << 5 | wide);
+            let wide = if narrow.is_some() { 0 } else { WIDE_BASE_2 };
+            out.push(bits as u8 | wide);
             match narrow {
                 Some(b) => out.extend(b.to_le_bytes()),
                 None => out.extend(base.to_le_bytes()),
             }
-            for c in codes {
-                out.extend(&c.to_le_bytes()[..usize::from(width)]);
+            let mut column = vec![0u8; (self.len * bits as usize).div_ceil(8)];
+            for (k, &c) in codes.iter().enumerate() {
+                for i in 0..bits as usize {
+                    if c >> i & 1 == 1 {
+                        let at = k * bits as usize + i;
+                        column[at / 8] |= 1 << (at % 8);
+                    }
+                }
             }
+            out.extend(column);
         }
         out
     }

@@ -210,7 +210,7 @@ pub fn encode_shared(
         .collect();
     let params = SegmentParams::at_rate(fps);
     let mut decoded = vec![vec![Vec::new(); channels]; takes.len()];
-    let mut database = vec![nodes.len() as u8, mocap_decoder::pattern::LAYOUT_COLUMNS];
+    let mut database = vec![nodes.len() as u8, mocap_decoder::pattern::LAYOUT_PACKED];
     let mut sections: Vec<Vec<u8>> = vec![vec![mocap_decoder::pattern::FLAG_SHARED]; takes.len()];
     for channels in nodes {
         let mut channels = channels.clone();
@@ -281,15 +281,24 @@ pub fn encode_shared(
     })
 }
 
-/// Appends a database node record (§11.2).
+/// Appends a database node record (§11.2, layout 2): the channels, their
+/// shifts (one per channel: every pattern steps a channel alike), the
+/// pattern offsets and records, and the 3 closing bytes.
 fn write_node(out: &mut Vec<u8>, channels: &[usize], np: &NodePatterns) {
     let records: Vec<Vec<u8>> = np.patterns.iter().map(Pattern::record).collect();
-    let data_len: usize = records.iter().map(Vec::len).sum();
+    let tail = mocap_decoder::pattern::PACKED_TAIL;
+    let data_len: usize = records.iter().map(Vec::len).sum::<usize>() + tail;
     out.extend((channels.len() as u16).to_le_bytes());
     out.extend((np.patterns.len() as u16).to_le_bytes());
     out.extend((data_len as u32).to_le_bytes());
     for &c in channels {
         out.extend((c as u16).to_le_bytes());
+    }
+    let first = np.patterns.first();
+    for i in 0..channels.len() {
+        let shift = first.map_or(0, |p| p.heads[i].1);
+        debug_assert!(np.patterns.iter().all(|p| p.heads[i].1 == shift));
+        out.push(shift);
     }
     let mut at = 0u32;
     for r in &records {
@@ -299,6 +308,7 @@ fn write_node(out: &mut Vec<u8>, channels: &[usize], np: &NodePatterns) {
     for r in records {
         out.extend(r);
     }
+    out.extend(std::iter::repeat_n(0u8, tail));
 }
 
 /// What `mocap info` shows of a `pattern` section.
@@ -311,10 +321,12 @@ pub struct SectionInfo {
     pub database_len: usize,
     /// Its records' layout (§11.2): 0 rows, 1 columns.
     pub layout: u8,
-    /// Layout 1: bytes of the codes.
+    /// Layouts 1 and 2: bytes the codes take in whole bytes per code
+    /// (layout 1).
     pub code_bytes: usize,
-    /// Layout 1: bytes the codes would take bit-packed, each channel of a
-    /// pattern at its largest code's bit length.
+    /// Layouts 1 and 2: bytes the codes take bit-packed, each channel of a
+    /// pattern at its largest code's bit length (layout 2, without its
+    /// columns' padding to whole bytes).
     pub packed_bytes: usize,
 }
 
@@ -353,15 +365,16 @@ pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
     let (mut code_bytes, mut packed_bits) = (0usize, 0usize);
     for _ in 0..n {
         let (nc, patterns, data) = (u16_at(at)?, u16_at(at + 2)?, u32_at(at + 4)?);
-        let offsets = at + 8 + nc * 2;
+        let packed = db.get(1) == Some(&mocap_decoder::pattern::LAYOUT_PACKED);
+        let offsets = at + 8 + nc * 2 + if packed { nc } else { 0 };
         let data_at = offsets + patterns * 4;
         let mut samples = 0;
         for p in 0..patterns {
             let rec = data_at + u32_at(offsets + p * 4)?;
             let len = u16_at(rec)?;
             samples += len * nc;
-            if db.get(1) == Some(&mocap_decoder::pattern::LAYOUT_COLUMNS) {
-                let (c, b) = column_code_sizes(db.get(rec + 2..)?, nc, len)?;
+            if db.get(1) != Some(&mocap_decoder::pattern::LAYOUT_ROWS) {
+                let (c, b) = column_code_sizes(db.get(rec + 2..)?, nc, len, packed)?;
                 code_bytes += c;
                 packed_bits += b;
             }
@@ -379,33 +392,45 @@ pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
     })
 }
 
-/// A layout-1 record's channels (SPEC.md §11.3b; `rec` from its first
-/// head on): the bytes of their codes, and the bits the codes would take
-/// each at its channel's bit width in this pattern (the largest code's
-/// bit length) — what bit-packed columns would store.
-fn column_code_sizes(rec: &[u8], nc: usize, len: usize) -> Option<(usize, usize)> {
+/// A layout-1 or -2 record's channels (SPEC.md §11.3b, §11.3c; `rec` from
+/// its first head on): the bytes their codes take in whole bytes (layout
+/// 1's widths 0, 1, 2, 4), and the bits they take bit-packed, each channel
+/// of the pattern at its largest code's bit length (layout 2).
+fn column_code_sizes(rec: &[u8], nc: usize, len: usize, packed: bool) -> Option<(usize, usize)> {
     let (mut at, mut bytes, mut bits) = (0usize, 0usize, 0usize);
     for _ in 0..nc {
         let h = *rec.get(at)?;
-        let w = [0usize, 1, 2, 4][usize::from(h >> 5 & 3)];
-        at += if h & mocap_decoder::pattern::HEAD_WIDE_BASE == 0 {
-            3
+        let (b, stored, wide) = if packed {
+            let b = usize::from(h & 63);
+            let wide = h & mocap_decoder::pattern::WIDE_BASE_2 != 0;
+            (b, (len * b).div_ceil(8), wide)
         } else {
-            5
+            let w = [0usize, 1, 2, 4][usize::from(h >> 5 & 3)];
+            let codes = rec.get(at + if h & 0x80 == 0 { 3 } else { 5 }..)?;
+            let largest = (0..len)
+                .map(|k| {
+                    codes[k * w..k * w + w]
+                        .iter()
+                        .rev()
+                        .fold(0u32, |v, &b| v << 8 | u32::from(b))
+                })
+                .max()
+                .unwrap_or(0);
+            (
+                32 - largest.leading_zeros() as usize,
+                len * w,
+                h & 0x80 != 0,
+            )
         };
-        let codes = rec.get(at..at + len * w)?;
-        let largest = (0..len)
-            .map(|k| {
-                codes[k * w..k * w + w]
-                    .iter()
-                    .rev()
-                    .fold(0u32, |v, &b| v << 8 | u32::from(b))
-            })
-            .max()
-            .unwrap_or(0);
-        bytes += len * w;
-        bits += len * (32 - largest.leading_zeros() as usize);
-        at += len * w;
+        let whole = match b {
+            0 => 0,
+            1..=8 => 1,
+            9..=16 => 2,
+            _ => 4,
+        };
+        bytes += len * whole;
+        bits += len * b;
+        at += if wide { 5 } else { 3 } + stored;
     }
     Some((bytes, bits))
 }
@@ -421,12 +446,14 @@ impl SectionInfo {
             sum(2),
             sum(3),
             self.database_len,
-            if self.layout == 0 { "rows" } else { "columns" }
+            ["rows", "columns", "bit-packed columns"]
+                .get(usize::from(self.layout))
+                .unwrap_or(&"?")
         );
         if self.code_bytes > 0 {
             s += &format!(
-                "  codes: {} B; bit-packed at each pattern's channel widths they would take {} B\n",
-                self.code_bytes, self.packed_bytes
+                "  codes: {} B bit-packed at each pattern's channel widths, {} B in whole bytes\n",
+                self.packed_bytes, self.code_bytes
             );
         }
         for (i, n) in self.nodes.iter().enumerate() {

@@ -1,0 +1,117 @@
+//! Pattern records in layout 2 (SPEC.md §11.3c): layout 1's columns with
+//! each channel's codes bit-packed at the width the pattern needs (0 … 32
+//! bits), the shifts once per node. A code is read from the four bytes at
+//! its first byte (the encoder ends a node's records with 3 bytes so this
+//! never reads past them); a value is `(base + code) << shift`.
+
+use super::columns::{round, round32, steps, Run, Scatter, Sink};
+use super::{position, u16_at, window, WIDE_BASE_2};
+
+/// Decodes frame `t` of a segment of `n` frames that plays the layout-2
+/// record `rec` into the node's `channels` of `out`, with the node's
+/// per-channel `shifts` (§11.3c, §11.4).
+pub(super) fn play(
+    rec: &[u8],
+    channels: &[[u8; 2]],
+    shifts: &[u8],
+    t: u32,
+    n: u32,
+    out: &mut [i32],
+) -> Option<()> {
+    let count = channels.len();
+    let first = usize::from(u16::from_le_bytes(*channels.first()?));
+    let last = usize::from(u16::from_le_bytes(*channels.last()?));
+    if last.wrapping_sub(first).wrapping_add(1) == count {
+        let run = out.get_mut(first..last.wrapping_add(1))?;
+        play_into(rec, shifts, t, n, Run(run.iter_mut()))
+    } else {
+        let channels = channels.iter();
+        play_into(rec, shifts, t, n, Scatter { out, channels })
+    }
+}
+
+#[inline(always)]
+fn play_into<S: Sink>(rec: &[u8], shifts: &[u8], t: u32, n: u32, sink: S) -> Option<()> {
+    let len = u16_at(rec, 0)?;
+    let rest = rec.get(2..)?;
+    let (j, frac) = position(t, n, u32::from(len));
+    let len = usize::from(len);
+    if frac == 0 {
+        return curve::<1, S>(rest, shifts, j as usize, [4096, 0, 0, 0], len, sink);
+    }
+    let (s0, w) = window(j, len as u32, frac);
+    let s0 = s0 as usize;
+    match len {
+        2 => curve::<2, S>(rest, shifts, s0, w, len, sink),
+        3 => curve::<3, S>(rest, shifts, s0, w, len, sink),
+        _ => curve::<4, S>(rest, shifts, s0, w, len, sink),
+    }
+}
+
+/// The `b`-bit code whose first bit is bit `bit` of `col` (§11.3c), from
+/// the 4 (or, past 25 bits, 5) bytes at its first byte.
+#[inline(always)]
+fn code_at(col: &[u8], bit: usize, b: u32) -> Option<u32> {
+    let at = bit >> 3;
+    let sh = (bit & 7) as u32;
+    if b <= 25 {
+        let w = col.get(at..at.wrapping_add(4))?.first_chunk::<4>()?;
+        Some((u32::from_le_bytes(*w) >> sh) & u32::MAX.wrapping_shr(32u32.wrapping_sub(b)))
+    } else {
+        let w = col.get(at..at.wrapping_add(5))?.first_chunk::<5>()?;
+        let x = u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) | u64::from(w[4]) << 32;
+        Some(((x >> sh) as u32) & u32::MAX.wrapping_shr(32u32.wrapping_sub(b)))
+    }
+}
+
+/// Every channel on the curve through its `K` codes from sample `s0` with
+/// the weights `w` (§11.4); `K = 1` with weight 4096 is the sample itself.
+fn curve<const K: usize, S: Sink>(
+    mut rest: &[u8],
+    shifts: &[u8],
+    s0: usize,
+    w: [i32; 4],
+    len: usize,
+    mut sink: S,
+) -> Option<()> {
+    let mut shifts = shifts.iter();
+    while let Some(o) = sink.slot() {
+        let s = *shifts.next()?;
+        let (&[h, b0, b1], r) = rest.split_first_chunk::<3>()?;
+        let (base, col) = if h & WIDE_BASE_2 == 0 {
+            (i32::from(i16::from_le_bytes([b0, b1])), r)
+        } else {
+            let (&[b2, b3], r) = r.split_first_chunk::<2>()?;
+            (i32::from_le_bytes([b0, b1, b2, b3]), r)
+        };
+        let b = u32::from(h & 63);
+        let code = if b == 0 {
+            0
+        } else {
+            let bits = b as usize;
+            let mut at = s0.wrapping_mul(bits);
+            if K == 1 {
+                code_at(col, at, b)? as i32
+            } else if b <= 16 {
+                // |Σ w·c| < 5 120 · 2^16: exact in 32 bits.
+                let mut acc = 0i32;
+                for &wk in w.iter().take(K) {
+                    acc = acc.wrapping_add(wk.wrapping_mul(code_at(col, at, b)? as i32));
+                    at = at.wrapping_add(bits);
+                }
+                round32(acc)
+            } else {
+                let mut acc = 0i64;
+                for &wk in w.iter().take(K) {
+                    let c = i64::from(code_at(col, at, b)?);
+                    acc = acc.wrapping_add(c.wrapping_mul(i64::from(wk)));
+                    at = at.wrapping_add(bits);
+                }
+                round(acc)
+            }
+        };
+        *o = steps(base, s, code);
+        rest = col.get(len.wrapping_mul(b as usize).wrapping_add(7) >> 3..)?;
+    }
+    Some(())
+}
