@@ -48,20 +48,64 @@ fn play_into<S: Sink>(rec: &[u8], shifts: &[u8], t: u32, n: u32, sink: S) -> Opt
     }
 }
 
+/// The 4 bytes at byte `at` of `col`, as a little-endian word.
+#[inline(always)]
+fn word(col: &[u8], at: usize) -> Option<u32> {
+    col.get(at..at.wrapping_add(4))?
+        .first_chunk::<4>()
+        .map(|w| u32::from_le_bytes(*w))
+}
+
 /// The `b`-bit code whose first bit is bit `bit` of `col` (§11.3c), from
 /// the 4 (or, past 25 bits, 5) bytes at its first byte.
 #[inline(always)]
-fn code_at(col: &[u8], bit: usize, b: u32) -> Option<u32> {
+fn code_at(col: &[u8], bit: usize, b: u32, mask: u32) -> Option<u32> {
     let at = bit >> 3;
     let sh = (bit & 7) as u32;
     if b <= 25 {
-        let w = col.get(at..at.wrapping_add(4))?.first_chunk::<4>()?;
-        Some((u32::from_le_bytes(*w) >> sh) & u32::MAX.wrapping_shr(32u32.wrapping_sub(b)))
+        Some(word(col, at)?.wrapping_shr(sh) & mask)
     } else {
         let w = col.get(at..at.wrapping_add(5))?.first_chunk::<5>()?;
         let x = u64::from(u32::from_le_bytes([w[0], w[1], w[2], w[3]])) | u64::from(w[4]) << 32;
-        Some(((x >> sh) as u32) & u32::MAX.wrapping_shr(32u32.wrapping_sub(b)))
+        Some(((x >> sh) as u32) & mask)
     }
+}
+
+/// `K` consecutive `b`-bit codes from bit `bit` of `col`: one word read
+/// when they fit in it with their first bit's offset (`K·b + 7 ≤ 32`), a
+/// word per two codes when two fit, else a read per code. Every read
+/// starts at a code's first byte (§11.3c's closing bytes keep it inside).
+#[inline(always)]
+fn codes<const K: usize>(col: &[u8], bit: usize, b: u32) -> Option<[u32; K]> {
+    let mask = u32::MAX.wrapping_shr(32u32.wrapping_sub(b));
+    let bits = b as usize;
+    let mut out = [0u32; K];
+    if (K as u32).wrapping_mul(b) <= 25 {
+        let x = word(col, bit >> 3)?.wrapping_shr((bit & 7) as u32);
+        let mut sh = 0u32;
+        for o in out.iter_mut() {
+            *o = x.wrapping_shr(sh) & mask;
+            sh = sh.wrapping_add(b);
+        }
+    } else if b <= 12 {
+        let mut at = bit;
+        for pair in out.chunks_mut(2) {
+            let x = word(col, at >> 3)?.wrapping_shr((at & 7) as u32);
+            let mut sh = 0u32;
+            for o in pair.iter_mut() {
+                *o = x.wrapping_shr(sh) & mask;
+                sh = sh.wrapping_add(b);
+            }
+            at = at.wrapping_add(bits.wrapping_mul(2));
+        }
+    } else {
+        let mut at = bit;
+        for o in out.iter_mut() {
+            *o = code_at(col, at, b, mask)?;
+            at = at.wrapping_add(bits);
+        }
+    }
+    Some(out)
 }
 
 /// Every channel on the curve through its `K` codes from sample `s0` with
@@ -81,32 +125,26 @@ fn curve<const K: usize, S: Sink>(
         let (base, col) = if h & WIDE_BASE_2 == 0 {
             (i32::from(i16::from_le_bytes([b0, b1])), r)
         } else {
-            let (&[b2, b3], r) = r.split_first_chunk::<2>()?;
-            (i32::from_le_bytes([b0, b1, b2, b3]), r)
+            wide_base(rest)?
         };
         let b = u32::from(h & 63);
         let code = if b == 0 {
             0
         } else {
-            let bits = b as usize;
-            let mut at = s0.wrapping_mul(bits);
+            let c = codes::<K>(col, s0.wrapping_mul(b as usize), b)?;
             if K == 1 {
-                code_at(col, at, b)? as i32
+                c.first().map_or(0, |&c| c as i32)
             } else if b <= 16 {
                 // |Σ w·c| < 5 120 · 2^16: exact in 32 bits.
-                let mut acc = 0i32;
-                for &wk in w.iter().take(K) {
-                    acc = acc.wrapping_add(wk.wrapping_mul(code_at(col, at, b)? as i32));
-                    at = at.wrapping_add(bits);
-                }
+                let acc = c
+                    .iter()
+                    .zip(w)
+                    .fold(0i32, |a, (&c, w)| a.wrapping_add(w.wrapping_mul(c as i32)));
                 round32(acc)
             } else {
-                let mut acc = 0i64;
-                for &wk in w.iter().take(K) {
-                    let c = i64::from(code_at(col, at, b)?);
-                    acc = acc.wrapping_add(c.wrapping_mul(i64::from(wk)));
-                    at = at.wrapping_add(bits);
-                }
+                let acc = c.iter().zip(w).fold(0i64, |a, (&c, w)| {
+                    a.wrapping_add(i64::from(c).wrapping_mul(i64::from(w)))
+                });
                 round(acc)
             }
         };
@@ -114,4 +152,14 @@ fn curve<const K: usize, S: Sink>(
         rest = col.get(len.wrapping_mul(b as usize).wrapping_add(7) >> 3..)?;
     }
     Some(())
+}
+
+/// A channel whose base is an `i32` (head bit 6): the base and the bytes
+/// after it. Out of line and cold, so that the common `i16` path keeps the
+/// base in one register (merged, the compiler rebuilt it from its bytes).
+#[cold]
+#[inline(never)]
+fn wide_base(rest: &[u8]) -> Option<(i32, &[u8])> {
+    let (&[_, b0, b1, b2, b3], r) = rest.split_first_chunk::<5>()?;
+    Some((i32::from_le_bytes([b0, b1, b2, b3]), r))
 }
