@@ -150,7 +150,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             metres_per_unit: read.unit_or_detect().metres(),
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: Vec::new(),
+            pattern: Default::default(),
         };
         let enc = encode::encode(&read.motion, &opts)?;
         let clip = Clip::parse(&enc.bytes).map_err(|e| format!("{e:?}"))?;

@@ -232,7 +232,7 @@ mod tests {
             metres_per_unit: metres,
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: Vec::new(),
+            pattern: Default::default(),
         };
         let bytes = encode::encode(&m, &opts).unwrap().bytes;
         let clip = Clip::parse(&bytes).unwrap();

@@ -456,7 +456,7 @@ pub fn encode_servo_clip(
                 metres_per_unit: 1e-3,
                 key_interval: opts.key_interval,
                 index_layout: Default::default(),
-                pattern_nodes: Vec::new(),
+                pattern: Default::default(),
             },
         )?;
         let bytes = attach_rig(&enc.bytes, rig, opts.names)?;

@@ -41,7 +41,7 @@ fn options(key_interval: Option<u16>) -> EncodeOptions {
         metres_per_unit: 1.0,
         key_interval,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     }
 }
 

@@ -316,7 +316,7 @@ pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
         metres_per_unit: mocap_encoder::units::detect(m).metres(),
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

@@ -68,7 +68,7 @@ fn c3d_corpus_roundtrip() {
                     metres_per_unit: mpu,
                     key_interval: None,
                     index_layout: Default::default(),
-                    pattern_nodes: Vec::new(),
+                    pattern: Default::default(),
                 };
                 let enc = markers::encode_markers(&clip, &opts)
                     .unwrap_or_else(|e| panic!("{name} {codec:?} {mm} mm: {e}"));

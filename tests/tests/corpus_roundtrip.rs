@@ -75,7 +75,7 @@ fn roundtrip_file(file: &Path, codec: CodecChoice, bound: &str) -> (usize, usize
         metres_per_unit: unit.metres(),
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     let enc = encode::encode(m, &opts).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     // Independent check: decode the bytes again, measure again.
@@ -243,7 +243,7 @@ fn auto_picks_the_smaller_codec() {
             metres_per_unit: units::detect(&m).metres(),
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: Vec::new(),
+            pattern: Default::default(),
         };
         encode::encode(&m, &opts).unwrap()
     };
@@ -273,7 +273,7 @@ fn index_35_01_reaches_ratio_6_at_1deg() {
         metres_per_unit: units::detect(&m).metres(),
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     let enc = encode::encode(&m, &opts).unwrap();
     eprintln!("35_01 @ 1deg: {:?}", enc.metrics);

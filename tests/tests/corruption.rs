@@ -47,7 +47,7 @@ fn encode_with(
         metres_per_unit: units::detect(m).metres(),
         key_interval,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

@@ -30,7 +30,7 @@ fn firmware_default_clip_is_current() {
         metres_per_unit: units::detect(&m).metres(),
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     let enc = encode::encode(&m, &opts).unwrap();
     Clip::parse(&shipped).unwrap();

@@ -53,7 +53,7 @@ fn motion_clip_layout(
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
         index_layout,
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }
@@ -362,6 +362,32 @@ fn earlier_pattern_layouts_keep_decoding() {
             diff(&expected, &actual)
         );
     }
+}
+
+/// The encoder still writes layout 1 on request (`--pattern-layout
+/// columns`, SPEC.md §11.3b): exactly the committed layout-1 clip.
+#[test]
+fn pattern_columns_layout_is_the_committed_layout_1_clip() {
+    let m = demo();
+    let opts = EncodeOptions {
+        codec: CodecChoice::Pattern,
+        bound: bound(&["20mm"]),
+        metres_per_unit: units::detect(&m).metres(),
+        key_interval: None,
+        index_layout: Default::default(),
+        pattern: mocap_encoder::codec::pattern::PatternOptions {
+            nodes: Vec::new(),
+            layout: mocap_encoder::codec::pattern::Layout::Columns,
+        },
+    };
+    let made = encode::encode(&m, &opts).unwrap().bytes;
+    let committed = std::fs::read(golden_dir().join("pre-packed/pattern_demo_20mm.mcb")).unwrap();
+    assert!(
+        made == committed,
+        "{} B against {} B",
+        made.len(),
+        committed.len()
+    );
 }
 
 /// Clips encoded from the corpus, pinned by digests of their bytes and of

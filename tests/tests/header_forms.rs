@@ -17,7 +17,7 @@ fn compact_and_full_headers_agree() {
         metres_per_unit: mpu,
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     let enc = encode::encode(&m, &opts).unwrap();
     let compact = Clip::parse(&enc.bytes).unwrap();

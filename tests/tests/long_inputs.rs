@@ -18,7 +18,7 @@ fn options(codec: CodecChoice, bound: &str, m: &Motion) -> (EncodeOptions, Vec<B
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     (opts, specs)
 }

@@ -15,7 +15,7 @@ fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
         metres_per_unit: units::detect(&m).metres(),
         key_interval,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }
@@ -133,7 +133,7 @@ fn pca_clip() -> Vec<u8> {
         metres_per_unit: units::detect(&m).metres(),
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }
@@ -228,7 +228,7 @@ fn pca_spline_cache_size_does_not_change_output() {
             metres_per_unit: units::detect(&m).metres(),
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: Vec::new(),
+            pattern: Default::default(),
         };
         clips.push(("05_04".into(), encode::encode(&m, &opts).unwrap().bytes));
     }

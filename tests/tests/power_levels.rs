@@ -19,7 +19,7 @@ fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
         metres_per_unit: units::detect(&m).metres(),
         key_interval,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     encode::encode(&m, &opts).unwrap().bytes
 }

@@ -49,7 +49,7 @@ fn encode_with(
         metres_per_unit: units::detect(m).metres(),
         key_interval: None,
         index_layout,
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     encode::encode(m, &opts).unwrap().bytes
 }

@@ -45,7 +45,7 @@ fn encode_to(
         metres_per_unit: units::detect(m).metres(),
         key_interval,
         index_layout,
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     let bytes = encode::encode(m, &opts).unwrap().bytes;
     std::fs::write(path, &bytes).unwrap();

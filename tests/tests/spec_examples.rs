@@ -386,7 +386,7 @@ fn fast_layout_round_trip() {
                     metres_per_unit: mocap_encoder::units::detect(&motion).metres(),
                     key_interval,
                     index_layout: layout,
-                    pattern_nodes: Vec::new(),
+                    pattern: Default::default(),
                 },
             )
             .unwrap()
@@ -457,7 +457,7 @@ fn two_channel_clip() -> Vec<u8> {
             metres_per_unit: 1e-3,
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: Vec::new(),
+            pattern: Default::default(),
         },
     )
     .unwrap()
@@ -659,7 +659,7 @@ fn example_input(
         metres_per_unit: 0.01,
         key_interval,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     (motion, opts)
 }
@@ -860,7 +860,7 @@ fn missing_samples_example() {
         metres_per_unit: 1e-3,
         key_interval: None,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     let enc = encode_markers(&clip, &opts).unwrap();
     assert!(enc.error.max_mm <= 1.0);

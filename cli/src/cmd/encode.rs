@@ -70,6 +70,12 @@ pub struct Args {
     /// together). A show file sets them with `pattern_nodes`.
     #[arg(long, value_parser = parse_nodes)]
     pattern_nodes: Option<PatternNodes>,
+    /// The `pattern` codec's layout: `packed` (SPEC.md §11.3c: codes
+    /// bit-packed, the smallest clip) or `columns` (§11.3b: whole-byte
+    /// codes, about a fifth larger and a fifth fewer decode instructions;
+    /// BENCHMARKS.md §11). A show file sets it with `pattern_layout`.
+    #[arg(long, value_parser = parse_pattern_layout, default_value = "packed")]
+    pattern_layout: mocap_encoder::codec::pattern::Layout,
     /// Also write the clip as a source file beside the output.
     #[arg(long, value_enum)]
     emit: Option<Emit>,
@@ -219,7 +225,10 @@ pub fn run(a: Args) -> super::Result {
         metres_per_unit: unit.metres(),
         key_interval: a.key_interval,
         index_layout: a.index_layout.unwrap_or_default(),
-        pattern_nodes: a.pattern_nodes.clone().map(|n| n.0).unwrap_or_default(),
+        pattern: mocap_encoder::codec::pattern::PatternOptions {
+            nodes: a.pattern_nodes.clone().map(|n| n.0).unwrap_or_default(),
+            layout: a.pattern_layout,
+        },
     };
     let enc = match chip {
         None => {
@@ -428,6 +437,11 @@ fn emit_source(kind: Emit, output: &Path, bytes: &[u8]) -> super::Result<PathBuf
     let path = output.with_extension(ext);
     write(&path, text.as_bytes())?;
     Ok(path)
+}
+
+/// `--pattern-layout`.
+fn parse_pattern_layout(s: &str) -> Result<mocap_encoder::codec::pattern::Layout, String> {
+    s.parse()
 }
 
 /// `--pattern-nodes`' value: the nodes' joint names.

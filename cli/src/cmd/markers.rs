@@ -82,7 +82,7 @@ pub fn encode(
         metres_per_unit: unit.metres(),
         key_interval,
         index_layout: Default::default(),
-        pattern_nodes: Vec::new(),
+        pattern: Default::default(),
     };
     let enc = markers::encode_markers(&clip, &opts)?;
     let x = &enc.error;

@@ -35,10 +35,9 @@ pub struct EncodeOptions {
     pub key_interval: Option<u16>,
     /// The `index` codec's section layout (SPEC.md §4.1 or §4.6).
     pub index_layout: crate::codec::index::IndexLayout,
-    /// The `pattern` codec's body-part nodes, each a list of joint names
-    /// (empty: the skeleton's limbs, [`crate::codec::pattern::nodes`]);
-    /// joints in no node keep the limbs they are in.
-    pub pattern_nodes: Vec<Vec<String>>,
+    /// The `pattern` codec's settings: its body-part nodes (empty: the
+    /// skeleton's limbs, [`crate::codec::pattern::nodes`]) and its layout.
+    pub pattern: crate::codec::pattern::PatternOptions,
 }
 
 /// An encoded clip and its measured quality.

@@ -31,9 +31,10 @@ fn attempt(
 ) -> Result<Attempt, EncodeError> {
     let fixed = &input.fixed;
     if opts.codec == CodecChoice::Pattern {
-        let nodes = pattern::nodes_with(m, &opts.pattern_nodes)?;
+        let nodes = pattern::nodes_with(m, &opts.pattern.nodes)?;
         let accept = pattern::accept_for(&opts.bound);
-        let enc = pattern::encode(&fixed.values, tol, accept, &nodes, 1.0 / m.frame_time)?;
+        let fps = 1.0 / m.frame_time;
+        let enc = pattern::encode(&fixed.values, tol, accept, &nodes, fps, opts.pattern.layout)?;
         let expected = FixedChannels {
             kinds: fixed.kinds.clone(),
             values: enc.decoded,
@@ -390,7 +391,7 @@ mod tests {
                 metres_per_unit: crate::units::detect(&m).metres(),
                 key_interval: None,
                 index_layout: Default::default(),
-                pattern_nodes: Vec::new(),
+                pattern: Default::default(),
             };
             let e = encode(&m, &opts).unwrap_or_else(|e| panic!("{codec:?}: {e}"));
             assert!(e.metrics.arms_mm <= 5.0, "{codec:?}");

@@ -81,7 +81,7 @@ pub fn encode_pattern_shared(
         .zip(metres_per_unit)
         .map(|(m, &u)| Reference::new(m, u))
         .collect();
-    let nodes = pattern::nodes_with(first, &opts.pattern_nodes)?;
+    let nodes = pattern::nodes_with(first, &opts.pattern.nodes)?;
     let fps = 1.0 / first.frame_time;
     let accept = pattern::accept_for(&opts.bound);
     let run = |tol: &[i64]| -> Result<Joint, EncodeError> {
@@ -90,7 +90,7 @@ pub fn encode_pattern_shared(
             database,
             sections,
             decoded,
-        } = pattern::encode_shared(&takes, tol, accept, &nodes, fps)?;
+        } = pattern::encode_shared(&takes, tol, accept, &nodes, fps, opts.pattern.layout)?;
         let mut attempts = Vec::new();
         for (k, (((m, r), segments), values)) in motions
             .iter()

@@ -144,9 +144,10 @@ pub struct ShowSpec {
     pub idle: Vec<String>,
     /// Triggers.
     pub triggers: Vec<TriggerSpec>,
-    /// The `pattern` codec's body-part nodes, each a list of joint names
-    /// (`pattern_nodes`; empty: the skeleton's limbs).
-    pub pattern_nodes: Vec<Vec<String>>,
+    /// The `pattern` codec's settings: body-part nodes, each a list of
+    /// joint names (`pattern_nodes`; empty: the skeleton's limbs), and
+    /// layout (`pattern_layout`: `packed`, the default, or `columns`).
+    pub pattern: crate::codec::pattern::PatternOptions,
 }
 
 #[derive(Deserialize)]
@@ -174,6 +175,7 @@ struct RawShow {
     #[serde(default)]
     idle: Vec<Spanned<String>>,
     pattern_nodes: Option<Spanned<Vec<Vec<String>>>>,
+    pattern_layout: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -661,10 +663,17 @@ impl ShowSpec {
                 nodes
             }
         };
+        let layout = match &show.pattern_layout {
+            None => Default::default(),
+            Some(l) => l.get_ref().parse().map_err(|e: String| at(l.span(), e))?,
+        };
         Ok(ShowSpec {
             file: file.to_string(),
             name,
-            pattern_nodes,
+            pattern: crate::codec::pattern::PatternOptions {
+                nodes: pattern_nodes,
+                layout,
+            },
             rig,
             fade_ms: show
                 .fade_ms

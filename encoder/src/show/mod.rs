@@ -279,7 +279,7 @@ pub fn build_with<'a>(
             c,
             source,
             rig.as_ref(),
-            &spec.pattern_nodes,
+            &spec.pattern,
             p.as_ref(),
         )?));
     }
@@ -307,7 +307,7 @@ pub fn build_with<'a>(
             metres_per_unit: metres[0],
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: spec.pattern_nodes.clone(),
+            pattern: spec.pattern.clone(),
         };
         let shared = encode::encode_pattern_shared(&motions, &metres, &opts, p.as_ref()).map_err(
             |source| ShowError::Encode {
@@ -415,7 +415,7 @@ fn encode_one(
     c: &ClipSpec,
     source: Source<'_>,
     rig: Option<&Rig>,
-    pattern_nodes: &[Vec<String>],
+    pattern: &crate::codec::pattern::PatternOptions,
     progress: &dyn encode::Progress,
 ) -> Result<Single, ShowError> {
     let Source {
@@ -469,7 +469,7 @@ fn encode_one(
             metres_per_unit: unit.metres(),
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: pattern_nodes.to_vec(),
+            pattern: pattern.clone(),
         },
         progress,
     )

@@ -112,7 +112,7 @@ mod tests {
                     metres_per_unit: crate::units::detect(&m).metres(),
                     key_interval: None,
                     index_layout,
-                    pattern_nodes: Vec::new(),
+                    pattern: Default::default(),
                 };
                 (candidate_label(codec, index_layout), encode(&m, &opts))
             })

@@ -209,7 +209,7 @@ impl Source {
             metres_per_unit: self.metres_per_unit,
             key_interval: None,
             index_layout: Default::default(),
-            pattern_nodes: Vec::new(),
+            pattern: Default::default(),
         };
         let t = Instant::now();
         let enc = match &self.markers {

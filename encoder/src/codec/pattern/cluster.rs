@@ -5,7 +5,9 @@
 //! every member within the channels' tolerances — a member that its group's
 //! pattern cannot carry becomes a pattern of its own, which always can.
 
-use mocap_decoder::pattern::{interpolate, position, taps, WIDE_BASE_2};
+use mocap_decoder::pattern::{
+    interpolate, position, taps, HEAD_WIDE_BASE, LAYOUT_COLUMNS, WIDE_BASE_2,
+};
 
 /// One node's motion: its channels' values and tolerances.
 pub struct NodeInput<'a> {
@@ -65,10 +67,44 @@ impl Pattern {
         interpolate(base, 0, t.map(|i| codes[i as usize]), w).wrapping_shl(u32::from(shift))
     }
 
-    /// Its record in the section (§11.3c, layout 2): sample count, then
-    /// per channel its head (code width in bits, wide-base flag), its base
-    /// (`i16` where it fits) and its codes bit-packed, LSB first.
-    pub fn record(&self) -> Vec<u8> {
+    /// Its record in the section in `layout` (§11.3b or §11.3c).
+    pub fn record(&self, layout: u8) -> Vec<u8> {
+        if layout == LAYOUT_COLUMNS {
+            self.record_columns()
+        } else {
+            self.record_packed()
+        }
+    }
+
+    /// Its record in layout 1 (§11.3b): sample count, then per channel its
+    /// head, its base (`i16` where it fits) and its codes in whole bytes.
+    fn record_columns(&self) -> Vec<u8> {
+        let mut out = (self.len as u16).to_le_bytes().to_vec();
+        for (codes, &(base, shift, width)) in self.codes.iter().zip(&self.heads) {
+            let code = match width {
+                0 => 0,
+                1 => 1,
+                2 => 2,
+                _ => 3,
+            };
+            let narrow = i16::try_from(base).ok();
+            let wide = if narrow.is_some() { 0 } else { HEAD_WIDE_BASE };
+            out.push(shift | code << 5 | wide);
+            match narrow {
+                Some(b) => out.extend(b.to_le_bytes()),
+                None => out.extend(base.to_le_bytes()),
+            }
+            for c in codes {
+                out.extend(&c.to_le_bytes()[..usize::from(width)]);
+            }
+        }
+        out
+    }
+
+    /// Its record in layout 2 (§11.3c): sample count, then per channel its
+    /// head (code width in bits, wide-base flag), its base (`i16` where it
+    /// fits) and its codes bit-packed, LSB first.
+    fn record_packed(&self) -> Vec<u8> {
         let mut out = (self.len as u16).to_le_bytes().to_vec();
         for (codes, &(base, _, _)) in self.codes.iter().zip(&self.heads) {
             let bits = codes

@@ -26,7 +26,7 @@ use mocap_decoder::consts;
 
 use super::CodecError;
 pub use cluster::Accept;
-use cluster::{NodeInput, NodePatterns, Pattern};
+use cluster::{NodeInput, NodePatterns};
 use segment::SegmentParams;
 
 /// The body-part hierarchy's nodes: the `pca-spline` codec's limb groups
@@ -116,6 +116,50 @@ pub fn nodes_with(
     Ok(out)
 }
 
+/// How a `pattern` clip's records are stored (SPEC.md §11.2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Layout {
+    /// Bit-packed columns (§11.3c, layout 2): the smallest.
+    #[default]
+    Packed,
+    /// Columns of whole-byte codes (§11.3b, layout 1): about a fifth
+    /// fewer decode instructions, a fifth more bytes (BENCHMARKS.md §11).
+    Columns,
+}
+
+impl std::str::FromStr for Layout {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Layout, String> {
+        match s {
+            "packed" => Ok(Layout::Packed),
+            "columns" => Ok(Layout::Columns),
+            _ => Err(format!(
+                "unknown pattern layout '{s}' (expected packed, the smallest, or columns, the fastest to decode)"
+            )),
+        }
+    }
+}
+
+impl Layout {
+    /// Its `layout` byte.
+    pub fn byte(self) -> u8 {
+        match self {
+            Layout::Packed => mocap_decoder::pattern::LAYOUT_PACKED,
+            Layout::Columns => mocap_decoder::pattern::LAYOUT_COLUMNS,
+        }
+    }
+}
+
+/// The `pattern` codec's settings (`EncodeOptions::pattern`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PatternOptions {
+    /// Body-part nodes, each a list of joint names ([`nodes_with`]; empty:
+    /// the skeleton's limbs).
+    pub nodes: Vec<Vec<String>>,
+    /// How the records are stored.
+    pub layout: Layout,
+}
+
 /// How close a segment must be to its pattern under `bound`: strict under
 /// an angle bound (every value within its tolerance), relaxed under a
 /// bound on joint positions alone ([`Accept::POSITIONAL`]).
@@ -156,8 +200,9 @@ pub fn encode(
     accept: Accept,
     nodes: &[Vec<usize>],
     fps: f64,
+    layout: Layout,
 ) -> Result<Encoded, CodecError> {
-    let mut shared = encode_shared(&[values], tol, accept, nodes, fps)?;
+    let mut shared = encode_shared(&[values], tol, accept, nodes, fps, layout)?;
     let segments = shared.sections.pop().unwrap_or_default();
     Ok(Encoded {
         section: with_database(&shared.database, &segments),
@@ -184,6 +229,7 @@ pub fn encode_shared(
     accept: Accept,
     nodes: &[Vec<usize>],
     fps: f64,
+    layout: Layout,
 ) -> Result<Shared, CodecError> {
     let lengths: Vec<usize> = takes
         .iter()
@@ -210,7 +256,7 @@ pub fn encode_shared(
         .collect();
     let params = SegmentParams::at_rate(fps);
     let mut decoded = vec![vec![Vec::new(); channels]; takes.len()];
-    let mut database = vec![nodes.len() as u8, mocap_decoder::pattern::LAYOUT_PACKED];
+    let mut database = vec![nodes.len() as u8, layout.byte()];
     let mut sections: Vec<Vec<u8>> = vec![vec![mocap_decoder::pattern::FLAG_SHARED]; takes.len()];
     for channels in nodes {
         let mut channels = channels.clone();
@@ -251,7 +297,7 @@ pub fn encode_shared(
                 patterns: np.patterns.len(),
             });
         }
-        write_node(&mut database, &channels, &np);
+        write_node(&mut database, &channels, &np, layout);
         for (take, &(from, count)) in per_take.iter().enumerate() {
             let first = firsts[take];
             let section = &mut sections[take];
@@ -281,12 +327,21 @@ pub fn encode_shared(
     })
 }
 
-/// Appends a database node record (§11.2, layout 2): the channels, their
-/// shifts (one per channel: every pattern steps a channel alike), the
-/// pattern offsets and records, and the 3 closing bytes.
-fn write_node(out: &mut Vec<u8>, channels: &[usize], np: &NodePatterns) {
-    let records: Vec<Vec<u8>> = np.patterns.iter().map(Pattern::record).collect();
-    let tail = mocap_decoder::pattern::PACKED_TAIL;
+/// Appends a database node record (§11.2): the channels, in layout 2
+/// their shifts (one per channel: every pattern steps a channel alike),
+/// the pattern offsets and records, in layout 2 the 3 closing bytes.
+fn write_node(out: &mut Vec<u8>, channels: &[usize], np: &NodePatterns, layout: Layout) {
+    let records: Vec<Vec<u8>> = np
+        .patterns
+        .iter()
+        .map(|p| p.record(layout.byte()))
+        .collect();
+    let packed = layout == Layout::Packed;
+    let tail = if packed {
+        mocap_decoder::pattern::PACKED_TAIL
+    } else {
+        0
+    };
     let data_len: usize = records.iter().map(Vec::len).sum::<usize>() + tail;
     out.extend((channels.len() as u16).to_le_bytes());
     out.extend((np.patterns.len() as u16).to_le_bytes());
@@ -294,11 +349,13 @@ fn write_node(out: &mut Vec<u8>, channels: &[usize], np: &NodePatterns) {
     for &c in channels {
         out.extend((c as u16).to_le_bytes());
     }
-    let first = np.patterns.first();
-    for i in 0..channels.len() {
-        let shift = first.map_or(0, |p| p.heads[i].1);
-        debug_assert!(np.patterns.iter().all(|p| p.heads[i].1 == shift));
-        out.push(shift);
+    if packed {
+        let first = np.patterns.first();
+        for i in 0..channels.len() {
+            let shift = first.map_or(0, |p| p.heads[i].1);
+            debug_assert!(np.patterns.iter().all(|p| p.heads[i].1 == shift));
+            out.push(shift);
+        }
     }
     let mut at = 0u32;
     for r in &records {
