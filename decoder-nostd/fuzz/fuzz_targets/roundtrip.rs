@@ -103,7 +103,8 @@ fuzz_target!(|input: Input| {
         CodecChoice::Index,
         CodecChoice::PcaSpline,
         CodecChoice::Predictive,
-    ][usize::from(input.codec % 3)];
+        CodecChoice::Pattern,
+    ][usize::from(input.codec % 4)];
     let bound_deg = 0.05 + f64::from(input.bound_cdeg % 996) / 100.0;
     let opts = EncodeOptions {
         codec,
@@ -111,6 +112,7 @@ fuzz_target!(|input: Input| {
         metres_per_unit: METRES_PER_UNIT,
         key_interval: (input.key_interval != 0).then_some(u16::from(input.key_interval)),
         index_layout: Default::default(),
+        pattern: Default::default(),
     };
     // An encoder may refuse a motion (it says why); it must not write a clip that breaks the bound.
     let Ok(encoded) = encode(&m, &opts) else {

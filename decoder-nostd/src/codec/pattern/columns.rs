@@ -166,9 +166,20 @@ pub(super) fn split_head(rest: &[u8]) -> Option<(i32, u8, &[u8])> {
     if h & HEAD_WIDE_BASE == 0 {
         Some((i32::from(i16::from_le_bytes([b0, b1])), h, r))
     } else {
-        let (&[b2, b3], r) = r.split_first_chunk::<2>()?;
-        Some((i32::from_le_bytes([b0, b1, b2, b3]), h, r))
+        let (base, r) = wide_base(rest)?;
+        Some((base, h, r))
     }
+}
+
+/// A channel whose base is an `i32` (layout 1 head bit 7, layout 2 bit 6):
+/// the base and the bytes after it. Out of line and cold, so that the
+/// common `i16` path keeps the base in one register (merged, the compiler
+/// rebuilt it from its bytes every channel).
+#[cold]
+#[inline(never)]
+pub(super) fn wide_base(rest: &[u8]) -> Option<(i32, &[u8])> {
+    let (&[_, b0, b1, b2, b3], r) = rest.split_first_chunk::<5>()?;
+    Some((i32::from_le_bytes([b0, b1, b2, b3]), r))
 }
 
 /// A value: `(base + code) << shift`, wrapping (§11.3b).

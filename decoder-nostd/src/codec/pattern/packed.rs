@@ -4,7 +4,7 @@
 //! its first byte (the encoder ends a node's records with 3 bytes so this
 //! never reads past them); a value is `(base + code) << shift`.
 
-use super::columns::{round, round32, steps, Run, Scatter, Sink};
+use super::columns::{round, round32, steps, wide_base, Run, Scatter, Sink};
 use super::{position, u16_at, window, WIDE_BASE_2};
 
 /// Decodes frame `t` of a segment of `n` frames that plays the layout-2
@@ -152,14 +152,4 @@ fn curve<const K: usize, S: Sink>(
         rest = col.get(len.wrapping_mul(b as usize).wrapping_add(7) >> 3..)?;
     }
     Some(())
-}
-
-/// A channel whose base is an `i32` (head bit 6): the base and the bytes
-/// after it. Out of line and cold, so that the common `i16` path keeps the
-/// base in one register (merged, the compiler rebuilt it from its bytes).
-#[cold]
-#[inline(never)]
-fn wide_base(rest: &[u8]) -> Option<(i32, &[u8])> {
-    let (&[_, b0, b1, b2, b3], r) = rest.split_first_chunk::<5>()?;
-    Some((i32::from_le_bytes([b0, b1, b2, b3]), r))
 }
