@@ -72,8 +72,9 @@ pub struct Args {
     pattern_nodes: Option<PatternNodes>,
     /// The `pattern` codec's layout: `packed` (SPEC.md §11.3c: codes
     /// bit-packed, the smallest clip) or `columns` (§11.3b: whole-byte
-    /// codes, about a fifth larger and a fifth fewer decode instructions;
-    /// BENCHMARKS.md §11). A show file sets it with `pattern_layout`.
+    /// codes, 14–28 % larger and a quarter fewer decode instructions on a
+    /// Cortex-M3; BENCHMARKS.md §11). A show file sets it with
+    /// `pattern_layout`.
     #[arg(long, value_parser = parse_pattern_layout, default_value = "packed")]
     pattern_layout: mocap_encoder::codec::pattern::Layout,
     /// Also write the clip as a source file beside the output.

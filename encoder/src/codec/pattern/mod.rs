@@ -122,8 +122,9 @@ pub enum Layout {
     /// Bit-packed columns (§11.3c, layout 2): the smallest.
     #[default]
     Packed,
-    /// Columns of whole-byte codes (§11.3b, layout 1): about a fifth
-    /// fewer decode instructions, a fifth more bytes (BENCHMARKS.md §11).
+    /// Columns of whole-byte codes (§11.3b, layout 1): a quarter fewer
+    /// decode instructions on a Cortex-M3, 14–28 % more bytes
+    /// (BENCHMARKS.md §11).
     Columns,
 }
 
