@@ -327,10 +327,11 @@ impl<'a> PatternCodec<'a> {
     }
 
     /// Decodes frame `f` into `out` (one value per channel). `cursors`
-    /// holds [`CURSOR_WORDS`] per node that remember each node's segment
-    /// from the last call (all 0 at first: no segment yet): the next
-    /// frame is in the same segment or the next one, no search. Without
-    /// room for every node's cursor (e.g. empty) the nodes past it search.
+    /// holds [`CURSOR_WORDS`] per node that remember each node's place in
+    /// the database and its segment from the last call (all 0 at first:
+    /// filled on this call): the next frame is in the same segment or the
+    /// next one, no search. Without room for every node's cursor (e.g.
+    /// empty) each node finds its segment by a binary search.
     /// `None` only if an invariant of the validated section is broken.
     /// Out of line: inlined into the player's frame loop every codec
     /// shares, it took the `index` path 16 more bytes of stack on the M0.
