@@ -82,7 +82,7 @@ fn play_into<S: Sink>(rec: &[u8], t: u32, n: u32, sink: S) -> Option<()> {
 /// Every channel at its sample `j`.
 fn at_sample<S: Sink>(mut rest: &[u8], j: usize, len: usize, mut sink: S) -> Option<()> {
     while let Some(o) = sink.slot() {
-        let (base, h, col) = split_head(rest)?;
+        let (base, h, col) = split_head(rest, HEAD_WIDE_BASE)?;
         let (code, next) = match h >> 5 & 3 {
             0 => (0, col),
             1 => (i32::from(*col.get(j)?), col.get(len..)?),
@@ -112,7 +112,7 @@ fn curve<const K: usize, S: Sink>(
     mut sink: S,
 ) -> Option<()> {
     while let Some(o) = sink.slot() {
-        let (base, h, col) = split_head(rest)?;
+        let (base, h, col) = split_head(rest, HEAD_WIDE_BASE)?;
         let (code, next) = match h >> 5 & 3 {
             0 => (0, col),
             1 => {
@@ -159,11 +159,12 @@ fn curve<const K: usize, S: Sink>(
 }
 
 /// The channel at the start of `rest`: its base (in steps), its head and
-/// the bytes from its codes on.
+/// the bytes from its codes on; `wide` is the head bit that makes the base
+/// an `i32` (layout 1: bit 7, layout 2: bit 6).
 #[inline(always)]
-pub(super) fn split_head(rest: &[u8]) -> Option<(i32, u8, &[u8])> {
+pub(super) fn split_head(rest: &[u8], wide: u8) -> Option<(i32, u8, &[u8])> {
     let (&[h, b0, b1], r) = rest.split_first_chunk::<3>()?;
-    if h & HEAD_WIDE_BASE == 0 {
+    if h & wide == 0 {
         Some((i32::from(i16::from_le_bytes([b0, b1])), h, r))
     } else {
         let (base, r) = wide_base(rest)?;
@@ -177,7 +178,7 @@ pub(super) fn split_head(rest: &[u8]) -> Option<(i32, u8, &[u8])> {
 /// rebuilt it from its bytes every channel).
 #[cold]
 #[inline(never)]
-pub(super) fn wide_base(rest: &[u8]) -> Option<(i32, &[u8])> {
+fn wide_base(rest: &[u8]) -> Option<(i32, &[u8])> {
     let (&[_, b0, b1, b2, b3], r) = rest.split_first_chunk::<5>()?;
     Some((i32::from_le_bytes([b0, b1, b2, b3]), r))
 }

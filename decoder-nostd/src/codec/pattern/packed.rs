@@ -4,7 +4,7 @@
 //! its first byte (the encoder ends a node's records with 3 bytes so this
 //! never reads past them); a value is `(base + code) << shift`.
 
-use super::columns::{round, round32, steps, wide_base, Run, Scatter, Sink};
+use super::columns::{round, round32, split_head, steps, Run, Scatter, Sink};
 use super::{position, u16_at, window, WIDE_BASE_2};
 
 /// Decodes frame `t` of a segment of `n` frames that plays the layout-2
@@ -121,12 +121,7 @@ fn curve<const K: usize, S: Sink>(
     let mut shifts = shifts.iter();
     while let Some(o) = sink.slot() {
         let s = *shifts.next()?;
-        let (&[h, b0, b1], r) = rest.split_first_chunk::<3>()?;
-        let (base, col) = if h & WIDE_BASE_2 == 0 {
-            (i32::from(i16::from_le_bytes([b0, b1])), r)
-        } else {
-            wide_base(rest)?
-        };
+        let (base, h, col) = split_head(rest, WIDE_BASE_2)?;
         let b = u32::from(h & 63);
         let code = if b == 0 {
             0
