@@ -56,9 +56,11 @@ pub const SECTION_CODEC_PREDICTIVE: u8 = 0x12;
 pub const SECTION_CODEC_INDEX_FAST: u8 = 0x13;
 /// Section id of the `pattern` codec payload, §11.
 pub const SECTION_CODEC_PATTERN: u8 = 0x14;
+/// Section id of the `rma` codec payload, §12.
+pub const SECTION_CODEC_RMA: u8 = 0x15;
 
 /// Whether `id` is a codec section's (§2.2): `index` (both layouts),
-/// `pca-spline`, `predictive`, `pattern`.
+/// `pca-spline`, `predictive`, `pattern`, `rma`.
 pub const fn is_codec_section(id: u8) -> bool {
     matches!(
         id,
@@ -67,6 +69,7 @@ pub const fn is_codec_section(id: u8) -> bool {
             | SECTION_CODEC_PCA_SPLINE
             | SECTION_CODEC_PREDICTIVE
             | SECTION_CODEC_PATTERN
+            | SECTION_CODEC_RMA
     )
 }
 

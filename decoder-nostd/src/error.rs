@@ -182,6 +182,11 @@ pub enum Error {
         /// Which rule of §11 is broken.
         rule: &'static str,
     },
+    /// The `rma` codec section is malformed (§12).
+    RmaMalformed {
+        /// Which rule of §12 is broken.
+        rule: &'static str,
+    },
     /// An entropy-coder frequency table breaks a rule of §10.2.
     EntropyTable {
         /// Which rule of §10.2 is broken.
@@ -336,6 +341,7 @@ impl fmt::Display for Error {
             Error::PcaMalformed { rule } => write!(f, "pca-spline codec: {rule}"),
             Error::PredictiveMalformed { rule } => write!(f, "predictive codec: {rule}"),
             Error::PatternMalformed { rule } => write!(f, "pattern codec: {rule}"),
+            Error::RmaMalformed { rule } => write!(f, "rma codec: {rule}"),
             Error::EntropyTable { rule } => write!(f, "entropy table: {rule}"),
             Error::EntropyState => {
                 f.write_str("entropy-coded stream: initial state missing or out of range")

@@ -91,6 +91,13 @@ pub mod pattern {
     };
 }
 
+/// The constants of the `rma` codec's section (SPEC.md §12), public so the
+/// encoder writes what the decoder reads.
+#[cfg(feature = "codec-rma")]
+pub mod rma {
+    pub use crate::codec::rma::{CURSOR_WORDS, FORM, MAX_FRAMES, MAX_KNOT_GAP, REF_FRAC_BITS};
+}
+
 /// The prediction and reconstruction of the `predictive` codec (SPEC.md
 /// §5b), public so the encoder quantises against exactly what the decoder
 /// computes.

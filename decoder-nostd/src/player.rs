@@ -41,6 +41,9 @@ pub struct Player<'a, const N: usize> {
     /// Where the `pca-spline` codec is in its segment list.
     #[cfg(feature = "codec-pca-spline")]
     segment: crate::codec::pca_spline::Cursor<'a>,
+    /// Where the `rma` codec's reference position is in the segment list.
+    #[cfg(feature = "codec-rma")]
+    reference: crate::codec::pca_spline::Cursor<'a>,
     /// `index`: the frame `state_frame`; `pca-spline`: its cache of key
     /// intervals (a larger `N` caches more groups).
     state: [i32; N],
@@ -58,6 +61,15 @@ impl<'a, const N: usize> Player<'a, N> {
             });
         }
         let codec = clip.codec();
+        #[cfg(feature = "codec-rma")]
+        if let Codec::Rma(c) = &codec {
+            if c.state_words() > N {
+                return Err(Error::PlayerStateTooSmall {
+                    needed: c.state_words(),
+                    capacity: N,
+                });
+            }
+        }
         #[cfg(feature = "codec-predictive")]
         if let Codec::Predictive(c) = &codec {
             if c.state_words() > N {
@@ -79,6 +91,8 @@ impl<'a, const N: usize> Player<'a, N> {
             cursor: 0,
             #[cfg(feature = "codec-pca-spline")]
             segment: crate::codec::pca_spline::Cursor::default(),
+            #[cfg(feature = "codec-rma")]
+            reference: crate::codec::pca_spline::Cursor::default(),
             state: [0; N],
         })
     }
@@ -156,6 +170,19 @@ impl<'a, const N: usize> Player<'a, N> {
             #[cfg(feature = "codec-pca-spline")]
             Codec::PcaSpline(c) => c
                 .decode_at(pos, &mut self.segment, out, &mut self.state)
+                .map(|()| true)
+                .ok_or_else(|| Error::PlayerInvariant {
+                    frame: u32::try_from(pos >> 16).unwrap_or(u32::MAX),
+                }),
+            #[cfg(feature = "codec-rma")]
+            Codec::Rma(c) => c
+                .decode_at(
+                    pos,
+                    &mut self.segment,
+                    &mut self.reference,
+                    out,
+                    &mut self.state,
+                )
                 .map(|()| true)
                 .ok_or_else(|| Error::PlayerInvariant {
                     frame: u32::try_from(pos >> 16).unwrap_or(u32::MAX),

@@ -14,6 +14,8 @@ pub(crate) mod pattern;
 pub(crate) mod pca_spline;
 #[cfg(feature = "codec-predictive")]
 pub(crate) mod predictive;
+#[cfg(feature = "codec-rma")]
+pub(crate) mod rma;
 #[cfg(feature = "codec-pca-spline")]
 pub(crate) mod spline;
 
@@ -27,6 +29,8 @@ use pattern::PatternCodec;
 use pca_spline::PcaSplineCodec;
 #[cfg(feature = "codec-predictive")]
 use predictive::PredictiveCodec;
+#[cfg(feature = "codec-rma")]
+use rma::RmaCodec;
 
 /// The codec section of a clip, validated.
 #[derive(Clone, Copy, Debug)]
@@ -42,13 +46,15 @@ pub(crate) enum Codec<'a> {
     Predictive(PredictiveCodec<'a>),
     #[cfg(feature = "codec-pattern")]
     Pattern(PatternCodec<'a>),
+    #[cfg(feature = "codec-rma")]
+    Rma(RmaCodec<'a>),
     /// Never built: keeps `'a` used when every codec is compiled out.
     #[allow(dead_code)]
     None(core::marker::PhantomData<&'a ()>),
 }
 
 /// Validates the codec section `bytes` of id `id` against the header's
-/// channel and frame counts (SPEC.md §4–§5b, §11), with `model` the pattern
+/// channel and frame counts (SPEC.md §4–§5b, §11, §12), with `model` the pattern
 /// database a show clip reads (§9.2, §11.2); `ContainerNoCodec` for an id
 /// this build does not decode.
 pub(crate) fn open_codec<'a>(
@@ -80,6 +86,10 @@ pub(crate) fn open_codec<'a>(
         crate::consts::SECTION_CODEC_PATTERN => Ok(Codec::Pattern(PatternCodec::parse(
             bytes, model, channels, frames,
         )?)),
+        #[cfg(feature = "codec-rma")]
+        crate::consts::SECTION_CODEC_RMA => {
+            Ok(Codec::Rma(RmaCodec::parse(bytes, channels, frames)?))
+        }
         _ => Err(Error::ContainerNoCodec),
     }
 }
