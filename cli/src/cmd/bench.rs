@@ -46,6 +46,8 @@ pub enum BenchCodecArg {
     /// Motion pattern indexing (SPEC.md §11); each file alone (shows:
     /// `report/examples/pattern_db.rs`).
     Pattern,
+    /// Repeated motion analysis (SPEC.md §12).
+    Rma,
     /// Every codec; keep the smallest clip that meets the bound.
     Auto,
     /// Baseline: every channel of every frame as 16 bits at a step fitting
@@ -70,6 +72,7 @@ impl From<BenchCodecArg> for Method {
             BenchCodecArg::PcaSpline => Method::Codec(CodecChoice::PcaSpline),
             BenchCodecArg::Predictive => Method::Codec(CodecChoice::Predictive),
             BenchCodecArg::Pattern => Method::Codec(CodecChoice::Pattern),
+            BenchCodecArg::Rma => Method::Codec(CodecChoice::Rma),
             BenchCodecArg::Auto => Method::Codec(CodecChoice::Auto),
             BenchCodecArg::Raw16 => Method::Baseline(Baseline::Raw16),
             BenchCodecArg::Zstd => Method::Baseline(Baseline::QuantZstd),

@@ -40,6 +40,9 @@ pub enum CodecArg {
     /// Motion pattern indexing: body-part nodes, segments as references to
     /// time-normalised patterns (SPEC.md §11).
     Pattern,
+    /// Repeated motion: primary clips as splines, repeated clips as a
+    /// reference map into their primary plus residuals (SPEC.md §12).
+    Rma,
     /// Every codec; keep the smallest clip that meets the bound.
     Auto,
 }
@@ -51,6 +54,7 @@ impl From<CodecArg> for CodecChoice {
             CodecArg::PcaSpline => CodecChoice::PcaSpline,
             CodecArg::Predictive => CodecChoice::Predictive,
             CodecArg::Pattern => CodecChoice::Pattern,
+            CodecArg::Rma => CodecChoice::Rma,
             CodecArg::Auto => CodecChoice::Auto,
         }
     }

@@ -24,7 +24,7 @@ const METRES_PER_UNIT: f64 = 0.01;
 
 #[derive(Arbitrary, Debug)]
 struct Input {
-    /// 0 index, 1 pca-spline, 2 predictive (modulo 3).
+    /// 0 index, 1 pca-spline, 2 predictive, 3 pattern, 4 rma (modulo 5).
     codec: u8,
     /// Angle bound in hundredths of a degree, folded into 0.05°..=10°.
     bound_cdeg: u16,
@@ -104,7 +104,8 @@ fuzz_target!(|input: Input| {
         CodecChoice::PcaSpline,
         CodecChoice::Predictive,
         CodecChoice::Pattern,
-    ][usize::from(input.codec % 4)];
+        CodecChoice::Rma,
+    ][usize::from(input.codec % 5)];
     let bound_deg = 0.05 + f64::from(input.bound_cdeg % 996) / 100.0;
     let opts = EncodeOptions {
         codec,

@@ -26,27 +26,32 @@ pub enum CodecChoice {
     /// Motion pattern indexing: body-part nodes, segments as references to
     /// time-normalised patterns (SPEC.md §11).
     Pattern,
+    /// Repeated motion: primary clips as splines, repeated clips as a
+    /// reference map into their primary plus residuals (SPEC.md §12).
+    Rma,
     /// Every codec; keep the smallest clip that meets the bound.
     Auto,
 }
 
 impl CodecChoice {
     /// Every choice, in command-line order.
-    pub const ALL: [CodecChoice; 5] = [
+    pub const ALL: [CodecChoice; 6] = [
         CodecChoice::Index,
         CodecChoice::PcaSpline,
         CodecChoice::Predictive,
         CodecChoice::Pattern,
+        CodecChoice::Rma,
         CodecChoice::Auto,
     ];
 
-    /// The command-line name (`index`, `pca-spline`, `predictive`, `pattern`, `auto`).
+    /// The command-line name (`index`, `pca-spline`, `predictive`, `pattern`, `rma`, `auto`).
     pub fn name(self) -> &'static str {
         match self {
             CodecChoice::Index => "index",
             CodecChoice::PcaSpline => "pca-spline",
             CodecChoice::Predictive => "predictive",
             CodecChoice::Pattern => "pattern",
+            CodecChoice::Rma => "rma",
             CodecChoice::Auto => "auto",
         }
     }
@@ -54,7 +59,7 @@ impl CodecChoice {
 
 /// A name that is not a codec.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown codec '{0}' (index, pca-spline, predictive, pattern, auto)")]
+#[error("unknown codec '{0}' (index, pca-spline, predictive, pattern, rma, auto)")]
 pub struct UnknownCodec(pub String);
 
 impl FromStr for CodecChoice {
@@ -150,6 +155,7 @@ pub fn describe_section(
         consts::SECTION_CODEC_PCA_SPLINE => Some(pca_spline::inspect(section)?.describe()),
         consts::SECTION_CODEC_PREDICTIVE => Some(predictive::inspect(section)?.describe()),
         consts::SECTION_CODEC_PATTERN => Some(pattern::inspect(section)?.describe()),
+        consts::SECTION_CODEC_RMA => Some(rma::section::inspect(section)?.describe()),
         _ => None,
     }
 }
@@ -165,7 +171,7 @@ mod tests {
         }
         assert_eq!(
             "pca".parse::<CodecChoice>().unwrap_err().to_string(),
-            "unknown codec 'pca' (index, pca-spline, predictive, pattern, auto)"
+            "unknown codec 'pca' (index, pca-spline, predictive, pattern, rma, auto)"
         );
     }
 }

@@ -6,6 +6,7 @@
 mod bound;
 mod proof;
 mod reference;
+mod rma;
 mod search;
 mod shared;
 
@@ -90,9 +91,11 @@ pub enum EncodeError {
         /// The bound.
         bound: Bound,
     },
-    /// `pca-spline` misses the bound at its finest tolerance.
-    #[error("pca-spline could not meet the bound {bound} (max joint error {max_joint_err_mm:.2} mm, angle {angle_max_deg:.3}° at the finest tolerance)")]
+    /// `pca-spline` or `rma` misses the bound at its finest tolerance.
+    #[error("{} could not meet the bound {bound} (max joint error {max_joint_err_mm:.2} mm, angle {angle_max_deg:.3}° at the finest tolerance)", codec.name())]
     PcaBoundNotMet {
+        /// The codec.
+        codec: CodecChoice,
         /// The bound.
         bound: Bound,
         /// Max joint error measured, mm.
@@ -176,6 +179,7 @@ pub fn encode_with(
         };
         match codec {
             CodecChoice::PcaSpline => encode_pca(m, &input, &one, progress),
+            CodecChoice::Rma => rma::encode_rma(m, &input, &one, progress),
             _ => encode_by_tolerance(m, &input, &one, progress),
         }
     };

@@ -171,14 +171,6 @@ pub(super) fn encode_pca(
         weights: &weights,
         groups: &groups,
     };
-    let scale = match (
-        opts.bound.position_mm.or(opts.bound.arms_mm),
-        opts.bound.angle_deg,
-    ) {
-        (Some(p), _) => p,
-        (None, Some(d)) => d,
-        (None, None) => Bound::DEFAULT_TRANSLATION_MM,
-    };
     let fps = 1.0 / m.frame_time;
     let cache = pca_spline::Cache::default();
     let run = |tau: f64| -> Result<Attempt, EncodeError> {
@@ -203,10 +195,31 @@ pub(super) fn encode_pca(
         }
         try_model(&model)
     };
+    search_tau(opts, CodecChoice::PcaSpline, progress, run)
+}
+
+/// The search of the codecs driven by one weighted tolerance `τ`
+/// (`pca-spline`, `rma`): a log-bisection of `τ` from 1/256 to twice the
+/// bound's scale for the largest `τ` whose clip (made and proven by `run`)
+/// meets the bound, then a few probes just above it (size and error are not
+/// quite monotonic in `τ`); the smallest clip that holds.
+pub(super) fn search_tau(
+    opts: &EncodeOptions,
+    codec: CodecChoice,
+    progress: &dyn Progress,
+    run: impl Fn(f64) -> Result<Attempt, EncodeError> + Sync,
+) -> Result<Encoded, EncodeError> {
+    let scale = match (
+        opts.bound.position_mm.or(opts.bound.arms_mm),
+        opts.bound.angle_deg,
+    ) {
+        (Some(p), _) => p,
+        (None, Some(d)) => d,
+        (None, None) => Bound::DEFAULT_TRANSLATION_MM,
+    };
     let range = (scale / 256.0, scale * 2.0);
     let rounds = bisect_rounds(range, 20, 1.02) + 6;
-    let codec = CodecChoice::PcaSpline;
-    let (mut best, lo, mut attempts) = bisect(&opts.bound, range, 20, 1.02, run, |n| {
+    let (mut best, lo, mut attempts) = bisect(&opts.bound, range, 20, 1.02, &run, |n| {
         progress.round(codec, n, rounds)
     })?;
     // Size and error are not quite monotonic in τ: probe a little above
@@ -241,6 +254,7 @@ pub(super) fn encode_pca(
             let a = run(lo)?;
             if !opts.bound.holds(&a.metrics) {
                 return Err(EncodeError::PcaBoundNotMet {
+                    codec,
                     bound: opts.bound,
                     max_joint_err_mm: a.metrics.max_joint_err_mm,
                     angle_max_deg: a.metrics.angle_max_deg,
@@ -252,7 +266,7 @@ pub(super) fn encode_pca(
     Ok(Encoded {
         bytes: best.bytes,
         metrics: best.metrics,
-        codec: CodecChoice::PcaSpline,
+        codec,
         key_interval: 0,
         attempts,
     })
@@ -384,6 +398,7 @@ mod tests {
             CodecChoice::Index,
             CodecChoice::Predictive,
             CodecChoice::Pattern,
+            CodecChoice::Rma,
         ] {
             let opts = EncodeOptions {
                 codec,

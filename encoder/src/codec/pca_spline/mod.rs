@@ -55,6 +55,11 @@ pub struct Params {
     pub patch_share: f64,
     /// Longest segment the encoder makes, frames ([`MAX_FIT_SECONDS`]).
     pub max_segment: usize,
+    /// Keep the groups as given: a channel constant in this input stays in
+    /// its group, and the constants are exactly the channels of no group
+    /// (the `rma` codec models stretches of one clip separately, under the
+    /// clip's one group table).
+    pub fixed_groups: bool,
 }
 
 /// Longest segment the encoder makes, in seconds (the format allows 32 768
@@ -83,6 +88,7 @@ impl Params {
             jump_ratio: 10.0,
             patch_share: 1.0,
             max_segment: ((MAX_FIT_SECONDS * fps).round() as usize).max(64),
+            fixed_groups: false,
         }
     }
 }
@@ -191,7 +197,8 @@ pub fn model_with(
         weights: input.weights,
         groups: input.groups,
     };
-    let constant = |c: usize| input.values[c].iter().all(|&x| x == input.values[c][0]);
+    let constant =
+        |c: usize| !p.fixed_groups && input.values[c].iter().all(|&x| x == input.values[c][0]);
     let mut consts: Vec<(usize, i32)> = (0..channels)
         .filter(|&c| constant(c) || !input.groups.iter().any(|g| g.contains(&c)))
         .map(|c| (c, input.values[c][0]))

@@ -16,6 +16,7 @@
 
 pub mod clips;
 pub mod paths;
+pub mod section;
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
@@ -24,6 +25,7 @@ use crate::motion::Motion;
 
 pub use clips::{Clip, ClipKind};
 pub use paths::Path;
+pub use section::{Plan, Repeated};
 
 /// The analysis's parameters: the paper's values where it gives them.
 #[derive(Clone, Debug)]
@@ -99,8 +101,20 @@ impl Features {
     }
 }
 
-/// The body's rotation channels (every rotation channel of a joint with a
-/// parent), unwrapped, sampled every `step` frames, centred and projected
+/// The body's rotation channels: every rotation channel of a joint with a
+/// parent (the posture without the root).
+pub fn body_channels(m: &Motion) -> Vec<usize> {
+    let joints = m.skeleton.channel_joints();
+    m.skeleton
+        .channel_kinds()
+        .iter()
+        .enumerate()
+        .filter(|&(c, kind)| kind.is_rotation() && m.skeleton.joints[joints[c]].parent.is_some())
+        .map(|(c, _)| c)
+        .collect()
+}
+
+/// The body's rotation channels ([`body_channels`]), unwrapped, sampled every `step` frames, centred and projected
 /// on the principal components that keep `variance` of their variance.
 pub fn features(m: &Motion, p: &Params) -> Features {
     let frame_rate = if m.frame_time > 0.0 {
@@ -109,15 +123,7 @@ pub fn features(m: &Motion, p: &Params) -> Features {
         p.rate_hz
     };
     let step = ((frame_rate / p.rate_hz).round() as usize).max(1);
-    let joints = m.skeleton.channel_joints();
-    let body: Vec<usize> = m
-        .skeleton
-        .channel_kinds()
-        .iter()
-        .enumerate()
-        .filter(|&(c, kind)| kind.is_rotation() && m.skeleton.joints[joints[c]].parent.is_some())
-        .map(|(c, _)| c)
-        .collect();
+    let body = body_channels(m);
     let len = m.frames().div_ceil(step);
     let n = body.len();
     let mut x = DMatrix::<f64>::zeros(len, n.max(1));

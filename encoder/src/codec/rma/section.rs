@@ -1,0 +1,282 @@
+//! The `rma` codec's section (SPEC.md §12): which frames are repeated, the
+//! piecewise-linear reference map `Ref(t)` of each repeated clip into its
+//! primary, and which channels add the primary's value; the `pca-spline`
+//! body that follows is written by [`crate::codec::pca_spline`].
+
+use mocap_decoder::rma::{FORM, MAX_KNOT_GAP, REF_FRAC_BITS};
+
+use super::{Analysis, ClipKind};
+use crate::container::{varint, zigzag};
+
+/// A repeated clip as the section codes it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Repeated {
+    /// First frame.
+    pub start: u32,
+    /// Last frame (inclusive).
+    pub last: u32,
+    /// Knots of `Ref(t)`: frame relative to `start` (the first 0,
+    /// increasing) and the reference in `1/256` frames.
+    pub knots: Vec<(u32, i32)>,
+    /// Its primary's first and last frame (the encoder keeps `Ref(t)`
+    /// inside; not written).
+    pub primary: (u32, u32),
+}
+
+/// What the section says besides its body.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Plan {
+    /// Channels that add the primary's value in a repeated clip, sorted.
+    pub added: Vec<usize>,
+    /// Repeated clips in time order.
+    pub repeated: Vec<Repeated>,
+}
+
+impl Plan {
+    /// The plan of an analysis: every repeated clip, its reference map a
+    /// line between the analysis's reference frames every `knot_every`
+    /// frames (and at its last frame), kept inside its primary clip; the
+    /// frame-by-frame references of the 30 fps analysis step like stairs,
+    /// and a residual against a stair-stepped reading costs more keys than
+    /// the clip on its own (BENCHMARKS.md §9).
+    pub fn new(a: &Analysis, added: Vec<usize>, knot_every: usize) -> Plan {
+        let every = knot_every.clamp(1, MAX_KNOT_GAP as usize - 1);
+        let repeated = a
+            .clips
+            .iter()
+            .filter_map(|c| {
+                let ClipKind::Repeated { primary, reference } = &c.kind else {
+                    return None;
+                };
+                let p = a.clips.get(*primary)?;
+                let (lo, hi) = (p.start as i64, p.end.saturating_sub(1) as i64);
+                let len = c.end - c.start;
+                let mut at: Vec<usize> = (0..len).step_by(every).collect();
+                if at.last() != Some(&(len - 1)) {
+                    at.push(len - 1);
+                }
+                let knots = at
+                    .into_iter()
+                    .map(|t| {
+                        let r = reference.get(t).map_or(lo, |&r| r as i64).clamp(lo, hi);
+                        (t as u32, (r << REF_FRAC_BITS) as i32)
+                    })
+                    .collect();
+                Some(Repeated {
+                    start: c.start as u32,
+                    last: (c.end - 1) as u32,
+                    knots,
+                    primary: (lo as u32, hi as u32),
+                })
+            })
+            .collect();
+        Plan { added, repeated }
+    }
+
+    /// Moves every knot's reference to the primary frame nearest the
+    /// repeated frame's posture within `radius` frames of where the
+    /// analysis put it (at the analysis's coarser rate), to a fraction of a
+    /// frame by a parabola through the distances around the best: the
+    /// residual is then what the repetition does differently, not the
+    /// analysis's step. Distances are over `channels` of `values`
+    /// (`[channel][frame]`), each scaled by its weight.
+    pub fn refine(
+        &mut self,
+        values: &[Vec<i32>],
+        weights: &[f64],
+        channels: &[usize],
+        radius: usize,
+    ) {
+        let dist = |a: usize, b: usize| -> f64 {
+            channels
+                .iter()
+                .map(|&c| (f64::from(values[c][a] - values[c][b]) * weights[c]).powi(2))
+                .sum()
+        };
+        for r in &mut self.repeated {
+            let (lo, hi) = (r.primary.0 as usize, r.primary.1 as usize);
+            for knot in &mut r.knots {
+                let t = (r.start + knot.0) as usize;
+                let guess = (knot.1 >> REF_FRAC_BITS) as usize;
+                let from = guess.saturating_sub(radius).max(lo);
+                let to = (guess + radius).min(hi);
+                let Some(best) = (from..=to).min_by(|&a, &b| dist(t, a).total_cmp(&dist(t, b)))
+                else {
+                    continue;
+                };
+                let mut at = best as f64;
+                if best > lo && best < hi {
+                    let (a, m, b) = (dist(t, best - 1), dist(t, best), dist(t, best + 1));
+                    let curve = a - 2.0 * m + b;
+                    if curve > 0.0 {
+                        at += (0.5 * (a - b) / curve).clamp(-0.5, 0.5);
+                    }
+                }
+                let unit = f64::from(1u32 << REF_FRAC_BITS);
+                knot.1 = (at * unit).round() as i32;
+            }
+        }
+    }
+
+    /// The stretches of frames outside every repeated clip (first, last).
+    pub fn own_stretches(&self, frames: usize) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        let mut next = 0usize;
+        for r in &self.repeated {
+            if (r.start as usize) > next {
+                out.push((next, r.start as usize - 1));
+            }
+            next = r.last as usize + 1;
+        }
+        if next < frames {
+            out.push((next, frames - 1));
+        }
+        out
+    }
+
+    /// Whether frame `f` is in a repeated clip.
+    pub fn repeated_at(&self, f: usize) -> bool {
+        let i = self.repeated.partition_point(|r| (r.last as usize) < f);
+        self.repeated.get(i).is_some_and(|r| r.start as usize <= f)
+    }
+
+    /// The section: the plan, then `body` (a `pca-spline` section, §5).
+    pub fn to_section(&self, body: &[u8]) -> Vec<u8> {
+        let mut out = vec![FORM];
+        // Without repeated clips no channel adds anything.
+        let runs = if self.repeated.is_empty() {
+            Vec::new()
+        } else {
+            runs(&self.added)
+        };
+        varint(&mut out, runs.len() as u32);
+        let mut next = 0;
+        for (s, len) in runs {
+            varint(&mut out, s - next);
+            varint(&mut out, len);
+            next = s + len;
+        }
+        varint(&mut out, self.repeated.len() as u32);
+        let mut base = 0;
+        for r in &self.repeated {
+            varint(&mut out, r.start - base);
+            varint(&mut out, r.last - r.start);
+            varint(&mut out, r.knots.len() as u32);
+            let (mut t0, mut v0) = (0, (r.start as i32) << REF_FRAC_BITS);
+            for &(t, v) in &r.knots {
+                varint(&mut out, t - t0);
+                zigzag(&mut out, v.wrapping_sub(v0));
+                (t0, v0) = (t, v);
+            }
+            base = r.last + 1;
+        }
+        out.extend_from_slice(body);
+        out
+    }
+}
+
+/// Figures of an `rma` section for `mocap info`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SectionInfo {
+    /// Channels that add the primary's value.
+    pub added: usize,
+    /// Repeated clips.
+    pub repeated: usize,
+    /// Frames in repeated clips.
+    pub repeated_frames: usize,
+    /// Knots of their reference maps.
+    pub knots: usize,
+    /// Bytes before the body (the channel runs and the clip records).
+    pub plan_bytes: usize,
+    /// The body.
+    pub body: crate::codec::pca_spline::SectionInfo,
+}
+
+impl SectionInfo {
+    /// The lines `mocap info` prints for the section.
+    pub fn describe(&self) -> String {
+        format!(
+            "  rma codec: {} repeated clips ({} frames, {} knots), {} channels add the primary, {} bytes before the body\n{}",
+            self.repeated,
+            self.repeated_frames,
+            self.knots,
+            self.added,
+            self.plan_bytes,
+            self.body.describe()
+        )
+    }
+}
+
+/// Reads the figures back from a section (already validated by the
+/// decoder); `None` if it does not parse.
+pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
+    let mut r = crate::container::ByteCursor::new(section);
+    r.u8()?;
+    let mut info = SectionInfo::default();
+    for _ in 0..r.varint()? {
+        r.varint()?;
+        info.added += r.varint()? as usize;
+    }
+    info.repeated = r.varint()? as usize;
+    for _ in 0..info.repeated {
+        r.varint()?;
+        info.repeated_frames += r.varint()? as usize + 1;
+        let m = r.varint()? as usize;
+        info.knots += m;
+        for _ in 0..2 * m {
+            r.varint()?;
+        }
+    }
+    info.plan_bytes = r.pos();
+    info.body = crate::codec::pca_spline::inspect(section.get(r.pos()..)?)?;
+    Some(info)
+}
+
+/// Sorted channel indices as runs (first, length).
+pub fn runs(channels: &[usize]) -> Vec<(u32, u32)> {
+    let mut out: Vec<(u32, u32)> = Vec::new();
+    for &c in channels {
+        let c = c as u32;
+        match out.last_mut() {
+            Some((s, len)) if *s + *len == c => *len += 1,
+            _ => out.push((c, 1)),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn runs_join_neighbours() {
+        assert_eq!(runs(&[0, 1, 2, 5, 7, 8]), vec![(0, 3), (5, 1), (7, 2)]);
+        assert!(runs(&[]).is_empty());
+    }
+
+    #[test]
+    fn own_stretches_are_the_complement() {
+        let plan = Plan {
+            added: vec![],
+            repeated: vec![
+                Repeated {
+                    start: 3,
+                    last: 5,
+                    knots: vec![(0, 0)],
+                    primary: (0, 2),
+                },
+                Repeated {
+                    start: 6,
+                    last: 9,
+                    knots: vec![(0, 0)],
+                    primary: (0, 2),
+                },
+            ],
+        };
+        assert_eq!(plan.own_stretches(12), vec![(0, 2), (10, 11)]);
+        assert_eq!(plan.own_stretches(10), vec![(0, 2)]);
+        assert!(plan.repeated_at(3) && plan.repeated_at(9) && !plan.repeated_at(10));
+        assert!(!plan.repeated_at(2));
+    }
+}
