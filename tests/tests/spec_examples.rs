@@ -686,6 +686,8 @@ fn spec_has_examples_of_every_codec() {
         ids.contains(&0x14),
         "SPEC.md §7 needs an example of pattern"
     );
+    // `rma`: §7.10 (a repeated clip over a residual, fading between frames).
+    assert!(ids.contains(&0x15), "SPEC.md §7 needs an example of rma");
 }
 
 /// The reference decoder, written from the prose, gives the stated values

@@ -135,12 +135,14 @@ impl<'a> RmaCodec<'a> {
         CURSOR_WORDS.wrapping_add(self.channels)
     }
 
-    /// The repeated clip holding `frame`, if any. `cursor` (two words of
-    /// the player's state: a record's byte offset and the frame after the
-    /// clip before it) remembers where the last search ended, so playing
-    /// in order reads one record per pose; any other content only costs a
-    /// search from the first record.
-    fn clip_of(&self, frame: u32, cursor: &mut [i32]) -> Option<Option<RepeatedClip<'a>>> {
+    /// The repeated clip holding `frame`, and the clip after it: the one
+    /// that starts after `frame` when no clip holds it, the next record
+    /// when `frame` is the holding clip's last frame (else `None`).
+    /// `cursor` (two words of the player's state: a record's byte offset
+    /// and the frame after the clip before it) remembers where the last
+    /// search ended, so playing in order reads one record per pose; any
+    /// other content only costs a search from the first record.
+    fn clips_near(&self, frame: u32, cursor: &mut [i32]) -> Option<Near<'a>> {
         let (mut at, mut base) = match cursor {
             [a, b, ..] if (*b as u32) <= frame => (*a as u32 as usize, *b as u32),
             _ => (0, 0),
@@ -151,7 +153,8 @@ impl<'a> RmaCodec<'a> {
         let mut restarted = at == 0;
         loop {
             if at >= self.clips.len() {
-                break;
+                save(cursor, at, base);
+                return Some(Near::default());
             }
             let Some(c) = record_at(self.clips, at, base) else {
                 if restarted {
@@ -160,18 +163,27 @@ impl<'a> RmaCodec<'a> {
                 (at, base, restarted) = (0, 0, true);
                 continue;
             };
+            save(cursor, at, base);
             if frame < c.start {
-                break;
+                return Some(Near {
+                    here: None,
+                    after: Some(c),
+                });
             }
             if frame <= c.last {
-                save(cursor, at, base);
-                return Some(Some(c));
+                let after = if frame == c.last {
+                    record_at(self.clips, c.next, c.last.wrapping_add(1))
+                } else {
+                    None
+                };
+                return Some(Near {
+                    here: Some(c),
+                    after,
+                });
             }
             at = c.next;
             base = c.last.wrapping_add(1);
         }
-        save(cursor, at, base);
-        Some(None)
     }
 
     /// Decodes the pose at `pos` (frames, 16.16; at most the last frame)
@@ -181,6 +193,11 @@ impl<'a> RmaCodec<'a> {
     /// cursors for `t` and `Ref(t)`. `None` only if an invariant of the
     /// validated section is broken or `state` is shorter than
     /// [`RmaCodec::state_words`].
+    ///
+    /// A clip weighs 1 on its frames and fades linearly over the frame
+    /// before its start and the frame after its last (§12.3), so between
+    /// frames `sample_at` moves from one frame's pose to the next however
+    /// the body changes there. At a frame only the clip holding it counts.
     pub(crate) fn decode_at(
         &self,
         pos: u64,
@@ -190,16 +207,41 @@ impl<'a> RmaCodec<'a> {
         state: &mut [i32],
     ) -> Option<()> {
         let frame = u32::try_from(pos >> FRAC_BITS).ok()?;
+        let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
         let (cursor, rest) = state.split_at_mut_checked(CURSOR_WORDS)?;
         let (scratch, caches) = rest.split_at_mut_checked(self.channels)?;
         let half = caches.len() / 2;
         let (cache_t, cache_ref) = caches.split_at_mut(half);
-        let Some(clip) = self.clip_of(frame, cursor)? else {
-            return self.body.decode_at(pos, segment, out, cache_t);
-        };
-        let at = ref_position(&clip, pos, self.frames)?;
-        self.body.decode_at(at, reference, scratch, cache_ref)?;
+        let near = self.clips_near(frame, cursor)?;
         self.body.decode_at(pos, segment, out, cache_t)?;
+        let one = 1i64 << FRAC_BITS;
+        let mut add = |c: &RepeatedClip<'a>, weight: i64| -> Option<()> {
+            let at = ref_position(c, pos, self.frames)?;
+            self.body.decode_at(at, reference, scratch, cache_ref)?;
+            self.add_runs(scratch, weight, out)
+        };
+        if let Some(c) = &near.here {
+            add(
+                c,
+                if frame < c.last {
+                    one
+                } else {
+                    one.wrapping_sub(frac)
+                },
+            )?;
+        }
+        if let Some(c) = near
+            .after
+            .filter(|c| frac > 0 && c.start == frame.wrapping_add(1))
+        {
+            add(&c, frac)?;
+        }
+        Some(())
+    }
+
+    /// `out += (scratch · weight) >> 16` on the added channels (exactly
+    /// `scratch` at weight `2^16`).
+    fn add_runs(&self, scratch: &[i32], weight: i64, out: &mut [i32]) -> Option<()> {
         let mut r = Reader::new(self.runs);
         let mut c = 0usize;
         while !r.is_empty() {
@@ -209,12 +251,19 @@ impl<'a> RmaCodec<'a> {
             let o = out.get_mut(c..end)?;
             let s = scratch.get(c..end)?;
             for (o, &s) in o.iter_mut().zip(s) {
-                *o = o.wrapping_add(s);
+                *o = o.wrapping_add((i64::from(s).wrapping_mul(weight) >> FRAC_BITS) as i32);
             }
             c = end;
         }
         Some(())
     }
+}
+
+/// The clips around a frame ([`RmaCodec::clips_near`]).
+#[derive(Default)]
+struct Near<'a> {
+    here: Option<RepeatedClip<'a>>,
+    after: Option<RepeatedClip<'a>>,
 }
 
 fn save(cursor: &mut [i32], at: usize, base: u32) {

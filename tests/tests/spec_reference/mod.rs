@@ -1,6 +1,6 @@
 //! A reference decoder written from SPEC.md's prose alone — the container
 //! (§2), the header in both forms (§3.1, §3.4), `index` (§4), `pca-spline`
-//! (§5), `predictive` (§5b) and `pattern` (§11) — sharing no code with `mocap-decoder` or
+//! (§5), `predictive` (§5b), `pattern` (§11) and `rma` (§12) — sharing no code with `mocap-decoder` or
 //! `mocap-encoder`. The
 //! spec examples are decoded with it and with the real decoder; both must
 //! give the values SPEC.md states. Written for clarity, not speed: it
@@ -20,6 +20,7 @@ pub enum Codec {
     PcaSpline(Pca),
     Predictive(Predictive),
     Pattern(Pattern),
+    Rma(Rma),
 }
 
 /// §2 (§9.1 for `version` 2): preamble, section table, CRC; the sections
@@ -52,7 +53,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
     for (id, section) in sections(bytes, 1) {
         match id {
             0x01 | 0x02 => header = Some((id, section)),
-            0x10..=0x14 => codec = Some((id, section)),
+            0x10..=0x15 => codec = Some((id, section)),
             id => panic!("the reference reads no section {id:#04x}"),
         }
     }
@@ -64,6 +65,7 @@ pub fn parse(bytes: &[u8]) -> Clip {
         0x13 => Codec::IndexFast(IndexFast::parse(section, channels)),
         0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
         0x14 => Codec::Pattern(Pattern::parse(section, None, channels)),
+        0x15 => Codec::Rma(Rma::parse(section, channels)),
         _ => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
     };
     Clip {
@@ -87,6 +89,9 @@ impl Clip {
             Codec::Pattern(p) => (0..self.frame_count)
                 .map(|f| p.frame(f, self.frame_count, self.channels))
                 .collect(),
+            Codec::Rma(r) => (0..self.frame_count)
+                .map(|i| r.pose(u64::from(i) << 16, self.channels, self.frame_count))
+                .collect(),
         }
     }
 
@@ -98,15 +103,14 @@ impl Clip {
         let i = ns / ft;
         let frac = ((ns % ft) << 16) / ft;
         let last = u64::from(self.frame_count - 1);
+        let pos = if i >= last {
+            last << 16
+        } else {
+            (i << 16) | frac
+        };
         match &self.codec {
-            Codec::PcaSpline(p) => {
-                let pos = if i >= last {
-                    last << 16
-                } else {
-                    (i << 16) | frac
-                };
-                p.pose(pos, self.channels)
-            }
+            Codec::PcaSpline(p) => p.pose(pos, self.channels),
+            Codec::Rma(r) => r.pose(pos, self.channels, self.frame_count),
             Codec::Predictive(_) | Codec::Index(_) | Codec::IndexFast(_) | Codec::Pattern(_) => {
                 let frames = self.frames();
                 if i >= last {
@@ -122,6 +126,111 @@ impl Clip {
                     .collect()
             }
         }
+    }
+}
+
+/// §12: added channels, repeated clips, a `pca-spline` body.
+pub struct Rma {
+    pub added: Vec<usize>,
+    pub clips: Vec<RepeatedClip>,
+    pub body: Pca,
+}
+
+pub struct RepeatedClip {
+    pub start: u32,
+    pub last: u32,
+    /// `(t_i, r_i)`: frames from `start`, reference in 1/256 frames.
+    pub knots: Vec<(u32, i64)>,
+}
+
+impl Rma {
+    /// §12.1, §12.2.
+    pub fn parse(section: &[u8], channels: usize) -> Rma {
+        let mut r = Reader::new(section);
+        assert_eq!(r.u8(), 0, "form 0");
+        let mut added = Vec::new();
+        let mut next = 0usize;
+        for _ in 0..r.varint() {
+            let s = next + r.varint() as usize;
+            let len = r.varint() as usize;
+            assert!(len >= 1 && s + len <= channels);
+            added.extend(s..s + len);
+            next = s + len;
+        }
+        let mut clips = Vec::new();
+        let mut after = 0u32;
+        for _ in 0..r.varint() {
+            let start = after + r.varint();
+            let last = start + r.varint();
+            let m = r.varint();
+            assert!(m >= 1);
+            let (mut t, mut v) = (0u32, i64::from(start) * 256);
+            let knots = (0..m)
+                .map(|i| {
+                    let dt = r.varint();
+                    assert!(if i == 0 {
+                        dt == 0
+                    } else {
+                        dt >= 1 && dt < 1 << 15
+                    });
+                    t += dt;
+                    assert!(t <= last - start, "knot in the clip");
+                    v += i64::from(r.zigzag());
+                    assert!(i32::try_from(v).is_ok());
+                    (t, v)
+                })
+                .collect();
+            clips.push(RepeatedClip { start, last, knots });
+            after = last + 1;
+        }
+        let rest = r.take(section.len() - r.pos);
+        Rma {
+            added,
+            clips,
+            body: Pca::parse(rest, channels),
+        }
+    }
+
+    /// §12.3: the pose at `pos` (frames, 16.16).
+    pub fn pose(&self, pos: u64, channels: usize, frames: u32) -> Vec<i32> {
+        let mut out = self.body.pose(pos, channels);
+        let f = pos >> 16;
+        let phi = (pos & 0xFFFF) as i64;
+        for c in &self.clips {
+            let (start, last) = (u64::from(c.start), u64::from(c.last));
+            let w = if (start <= f && f < last) || (f == last && phi == 0) {
+                65536
+            } else if f == last {
+                65536 - phi
+            } else if f + 1 == start {
+                phi
+            } else {
+                0
+            };
+            if w == 0 {
+                continue;
+            }
+            // 1. Ref: linear between the knots around rel, the last knot after them.
+            let rel = (pos as i64 - ((start as i64) << 16)).max(0);
+            let (t_last, r_last) = *c.knots.last().unwrap();
+            let reference = if c.knots.len() == 1 || rel >= i64::from(t_last) << 16 {
+                r_last
+            } else {
+                let i = (1..c.knots.len())
+                    .find(|&i| i64::from(c.knots[i].0) << 16 > rel)
+                    .unwrap();
+                let (t0, r0) = c.knots[i - 1];
+                let (t1, r1) = c.knots[i];
+                let t0 = i64::from(t0) << 16;
+                r0 + ((r1 - r0) * (rel - t0)).div_euclid((i64::from(t1) << 16) - t0)
+            };
+            let at = (reference << 8).clamp(0, i64::from(frames - 1) << 16);
+            let primary = self.body.pose(at as u64, channels);
+            for &k in &self.added {
+                out[k] = out[k].wrapping_add(((i64::from(primary[k]) * w) >> 16) as i32);
+            }
+        }
+        out
     }
 }
 
@@ -1053,6 +1162,7 @@ pub fn parse_show(bytes: &[u8]) -> Vec<(String, Clip)> {
             0x13 => Codec::IndexFast(IndexFast::parse(section, channels)),
             0x11 => Codec::PcaSpline(Pca::parse(section, channels)),
             0x12 => Codec::Predictive(Predictive::parse(section, channels, frame_count)),
+            0x15 => Codec::Rma(Rma::parse(section, channels)),
             0x14 => {
                 // §11.1: a SHARED section reads the clip's first model section.
                 let model = models.first().map(|&m| {
