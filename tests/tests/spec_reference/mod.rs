@@ -171,7 +171,7 @@ impl Rma {
                     assert!(if i == 0 {
                         dt == 0
                     } else {
-                        dt >= 1 && dt < 1 << 15
+                        (1..1 << 15).contains(&dt)
                     });
                     t += dt;
                     assert!(t <= last - start, "knot in the clip");
