@@ -1,8 +1,8 @@
 //! Repeated motion analysis (Lin et al., TVCG 2011; METHODS.md §3), the
 //! analysis half of the `rma` codec: which stretches of a take repeat
-//! which. The bitstream that codes the result (primary clips as splines,
-//! repeated clips as a reference map into their primary plus residuals) is
-//! the next step of issue 14; this module finds the clips.
+//! which. [`section`] turns the clips into the bitstream's plan (SPEC.md
+//! §12: the body coded once as pca-spline, each repeated clip a
+//! piecewise-linear map into it plus a residual); `encode::rma` writes it.
 //!
 //! 1. [`features`]: the posture of every frame without the root (the body's
 //!    rotation channels, unwrapped), reduced by PCA to the components that
@@ -15,6 +15,7 @@
 //!    maximising the gain of eq. 5 with the costs of eq. 2 and eq. 3.
 
 pub mod clips;
+pub mod matches;
 pub mod paths;
 pub mod section;
 
@@ -182,6 +183,8 @@ pub struct Analysis {
     pub paths: Vec<Path>,
     /// The clips, in time order, covering every source frame once.
     pub clips: Vec<Clip>,
+    /// The clips of the paths' longest matches ([`matches`]), likewise.
+    pub matches: Vec<Clip>,
 }
 
 impl Analysis {
@@ -205,10 +208,12 @@ pub fn analyse(m: &Motion, p: &Params) -> Analysis {
     let features = features(m, p);
     let paths = paths::find(&features, p);
     let clips = clips::extract(&features, &paths, p, m.frames());
+    let matches = matches::extract(&features, &paths, p, m.frames());
     Analysis {
         features,
         paths,
         clips,
+        matches,
     }
 }
 

@@ -5,7 +5,7 @@
 
 use mocap_decoder::rma::{FORM, MAX_KNOT_GAP, REF_FRAC_BITS};
 
-use super::{Analysis, ClipKind};
+use super::{Clip, ClipKind};
 use crate::container::{varint, zigzag};
 
 /// A repeated clip as the section codes it.
@@ -21,6 +21,13 @@ pub struct Repeated {
     /// Its primary's first and last frame (the encoder keeps `Ref(t)`
     /// inside; not written).
     pub primary: (u32, u32),
+}
+
+impl Repeated {
+    /// `Ref(t)` at frame `t` of the clip, in frames.
+    pub fn reference_at(&self, t: u32) -> f64 {
+        at_knots(&self.knots, t) / f64::from(1u32 << REF_FRAC_BITS)
+    }
 }
 
 /// What the section says besides its body.
@@ -39,16 +46,15 @@ impl Plan {
     /// frame-by-frame references of the 30 fps analysis step like stairs,
     /// and a residual against a stair-stepped reading costs more keys than
     /// the clip on its own (BENCHMARKS.md §9).
-    pub fn new(a: &Analysis, added: Vec<usize>, knot_every: usize) -> Plan {
+    pub fn new(clips: &[Clip], added: Vec<usize>, knot_every: usize) -> Plan {
         let every = knot_every.clamp(1, MAX_KNOT_GAP as usize - 1);
-        let repeated = a
-            .clips
+        let repeated = clips
             .iter()
             .filter_map(|c| {
                 let ClipKind::Repeated { primary, reference } = &c.kind else {
                     return None;
                 };
-                let p = a.clips.get(*primary)?;
+                let p = clips.get(*primary)?;
                 let (lo, hi) = (p.start as i64, p.end.saturating_sub(1) as i64);
                 let len = c.end - c.start;
                 let mut at: Vec<usize> = (0..len).step_by(every).collect();
@@ -73,19 +79,23 @@ impl Plan {
         Plan { added, repeated }
     }
 
-    /// Moves every knot's reference to the primary frame nearest the
-    /// repeated frame's posture within `radius` frames of where the
-    /// analysis put it (at the analysis's coarser rate), to a fraction of a
-    /// frame by a parabola through the distances around the best: the
-    /// residual is then what the repetition does differently, not the
-    /// analysis's step. Distances are over `channels` of `values`
-    /// (`[channel][frame]`), each scaled by its weight.
+    /// Refines every clip's `Ref(t)`: each repeated frame's reference
+    /// moves to the primary frame nearest its posture within `radius`
+    /// frames of where the knots put it (the analysis's coarser rate), to
+    /// a fraction of a frame by a parabola through the distances around
+    /// the best; the knots are then the fewest whose line stays within
+    /// `tolerance` frames of those references (Douglas–Peucker), so a
+    /// clip that repeats at one speed costs two knots and the residual is
+    /// what the repetition does differently, not the analysis's step.
+    /// Distances are over `channels` of `values` (`[channel][frame]`),
+    /// each scaled by its weight.
     pub fn refine(
         &mut self,
         values: &[Vec<i32>],
         weights: &[f64],
         channels: &[usize],
         radius: usize,
+        tolerance: f64,
     ) {
         let dist = |a: usize, b: usize| -> f64 {
             channels
@@ -93,28 +103,45 @@ impl Plan {
                 .map(|&c| (f64::from(values[c][a] - values[c][b]) * weights[c]).powi(2))
                 .sum()
         };
+        let unit = f64::from(1u32 << REF_FRAC_BITS);
         for r in &mut self.repeated {
             let (lo, hi) = (r.primary.0 as usize, r.primary.1 as usize);
-            for knot in &mut r.knots {
-                let t = (r.start + knot.0) as usize;
-                let guess = (knot.1 >> REF_FRAC_BITS) as usize;
-                let from = guess.saturating_sub(radius).max(lo);
-                let to = (guess + radius).min(hi);
-                let Some(best) = (from..=to).min_by(|&a, &b| dist(t, a).total_cmp(&dist(t, b)))
-                else {
-                    continue;
-                };
-                let mut at = best as f64;
-                if best > lo && best < hi {
-                    let (a, m, b) = (dist(t, best - 1), dist(t, best), dist(t, best + 1));
-                    let curve = a - 2.0 * m + b;
-                    if curve > 0.0 {
-                        at += (0.5 * (a - b) / curve).clamp(-0.5, 0.5);
+            let len = (r.last - r.start) as usize + 1;
+            let best: Vec<f64> = (0..len)
+                .map(|t| {
+                    let guess = (at_knots(&r.knots, t as u32) / unit).round().max(0.0) as usize;
+                    let frame = r.start as usize + t;
+                    let from = guess.saturating_sub(radius).max(lo);
+                    let to = (guess + radius).min(hi);
+                    let Some(best) =
+                        (from..=to).min_by(|&a, &b| dist(frame, a).total_cmp(&dist(frame, b)))
+                    else {
+                        return guess.clamp(lo, hi) as f64;
+                    };
+                    let mut at = best as f64;
+                    // (An exact match stays on its frame.)
+                    if best > lo && best < hi && dist(frame, best) > 0.0 {
+                        let (a, m, b) = (
+                            dist(frame, best - 1),
+                            dist(frame, best),
+                            dist(frame, best + 1),
+                        );
+                        let curve = a - 2.0 * m + b;
+                        if curve > 0.0 {
+                            at += (0.5 * (a - b) / curve).clamp(-0.5, 0.5);
+                        }
                     }
-                }
-                let unit = f64::from(1u32 << REF_FRAC_BITS);
-                knot.1 = (at * unit).round() as i32;
-            }
+                    at
+                })
+                .collect();
+            let mut keep = vec![false; len];
+            keep[0] = true;
+            keep[len - 1] = true;
+            simplify(&best, 0, len - 1, tolerance, &mut keep);
+            r.knots = (0..len)
+                .filter(|&t| keep[t])
+                .map(|t| (t as u32, (best[t] * unit).round() as i32))
+                .collect();
         }
     }
 
@@ -245,6 +272,40 @@ pub fn runs(channels: &[usize]) -> Vec<(u32, u32)> {
     out
 }
 
+/// `Ref(t)` of `knots` at `t` (in 1/256 frames; held past the last knot).
+fn at_knots(knots: &[(u32, i32)], t: u32) -> f64 {
+    let i = knots.partition_point(|k| k.0 <= t);
+    match (i.checked_sub(1).and_then(|i| knots.get(i)), knots.get(i)) {
+        (Some(&(t0, v0)), Some(&(t1, v1))) => {
+            let w = f64::from(t - t0) / f64::from(t1 - t0);
+            f64::from(v0) + w * f64::from(v1 - v0)
+        }
+        (Some(&(_, v)), None) | (None, Some(&(_, v))) => f64::from(v),
+        (None, None) => 0.0,
+    }
+}
+
+/// Douglas–Peucker on `y[a..=b]` (`a` and `b` kept): marks in `keep` the
+/// points that hold every other point within `tolerance` of the lines
+/// between kept points. Iterative, so a long clip cannot overflow the stack.
+fn simplify(y: &[f64], a: usize, b: usize, tolerance: f64, keep: &mut [bool]) {
+    let mut todo = vec![(a, b)];
+    while let Some((a, b)) = todo.pop() {
+        if b <= a + 1 {
+            continue;
+        }
+        let line = |t: usize| y[a] + (y[b] - y[a]) * (t - a) as f64 / (b - a) as f64;
+        let (far, off) = (a + 1..b)
+            .map(|t| (t, (y[t] - line(t)).abs()))
+            .fold((a, 0.0), |m, x| if x.1 > m.1 { x } else { m });
+        if off > tolerance {
+            keep[far] = true;
+            todo.push((a, far));
+            todo.push((far, b));
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -278,5 +339,54 @@ mod tests {
         assert_eq!(plan.own_stretches(10), vec![(0, 2)]);
         assert!(plan.repeated_at(3) && plan.repeated_at(9) && !plan.repeated_at(10));
         assert!(!plan.repeated_at(2));
+    }
+
+    #[test]
+    fn simplify_keeps_the_corners_only() {
+        let line: Vec<f64> = (0..50).map(|t| 100.0 + 0.8 * t as f64).collect();
+        let mut keep = vec![false; 50];
+        (keep[0], keep[49]) = (true, true);
+        simplify(&line, 0, 49, 0.5, &mut keep);
+        assert_eq!(keep.iter().filter(|&&k| k).count(), 2);
+        let kink: Vec<f64> = (0..50).map(|t| (t as f64).min(20.0)).collect();
+        let mut keep = vec![false; 50];
+        (keep[0], keep[49]) = (true, true);
+        simplify(&kink, 0, 49, 0.5, &mut keep);
+        let kept: Vec<usize> = (0..50).filter(|&t| keep[t]).collect();
+        assert_eq!(kept, vec![0, 20, 49]);
+    }
+
+    #[test]
+    fn refine_finds_an_exact_repetition_in_two_knots() {
+        // Frames 100..189 repeat frames 10..99 exactly; the analysis's
+        // guess is off by three frames and stair-stepped.
+        let wave = |f: usize| ((f as f64 * 0.05).sin() * 300.0 + f as f64 * 20.0) as i32;
+        let values: Vec<Vec<i32>> = (0..2)
+            .map(|c| {
+                (0..200)
+                    .map(|f| if f >= 100 { wave(f - 90) } else { wave(f) } + c * 7)
+                    .collect()
+            })
+            .collect();
+        let mut plan = Plan {
+            added: vec![0, 1],
+            repeated: vec![Repeated {
+                start: 100,
+                last: 189,
+                knots: (0..90)
+                    .step_by(16)
+                    .chain([89])
+                    .map(|t| (t, ((13 + t / 2 * 2) as i32) << REF_FRAC_BITS))
+                    .collect(),
+                primary: (0, 99),
+            }],
+        };
+        plan.refine(&values, &[1.0, 1.0], &[0, 1], 4, 0.5);
+        let r = &plan.repeated[0];
+        assert_eq!(r.knots.len(), 2, "{:?}", r.knots);
+        for t in 0..90 {
+            let at = r.reference_at(t);
+            assert!((at - (10 + t) as f64).abs() < 0.5, "Ref({t}) = {at}");
+        }
     }
 }

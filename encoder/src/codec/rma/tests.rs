@@ -74,14 +74,14 @@ fn wander(f: usize, c: usize) -> f64 {
         .sum()
 }
 
-fn check_cover(a: &Analysis, frames: usize) {
+fn check_cover(clips: &[Clip], frames: usize) {
     let mut at = 0;
-    for (n, c) in a.clips.iter().enumerate() {
+    for (n, c) in clips.iter().enumerate() {
         assert_eq!(c.start, at, "clip {n} starts where the last ended");
         assert!(c.end > c.start);
         at = c.end;
         if let ClipKind::Repeated { primary, reference } = &c.kind {
-            let p = &a.clips[*primary];
+            let p = &clips[*primary];
             assert_eq!(p.kind, ClipKind::Primary);
             assert_eq!(reference.len(), c.end - c.start);
             for &r in reference {
@@ -103,7 +103,7 @@ fn a_periodic_take_is_mostly_repeated() {
     let frames = 720;
     let m = motion(frames, 5, periodic);
     let a = analyse(&m, &Params::default());
-    check_cover(&a, frames);
+    check_cover(&a.clips, frames);
     let [pri, rep, uni] = a.frames_by_kind();
     eprintln!(
         "k {}, {} paths, clips {}, primary {pri}, repeated {rep}, unique {uni}",
@@ -133,7 +133,7 @@ fn a_take_that_never_repeats_has_little_repetition() {
     let frames = 720;
     let m = motion(frames, 5, wander);
     let a = analyse(&m, &Params::default());
-    check_cover(&a, frames);
+    check_cover(&a.clips, frames);
     let [pri, rep, uni] = a.frames_by_kind();
     eprintln!(
         "k {}, {} paths, primary {pri}, repeated {rep}, unique {uni}",
@@ -148,11 +148,11 @@ fn tiny_and_still_takes() {
     for frames in [1, 2, 30] {
         let m = motion(frames, 2, periodic);
         let a = analyse(&m, &Params::default());
-        check_cover(&a, frames);
+        check_cover(&a.clips, frames);
     }
     let m = motion(300, 2, |_, _| 5.0);
     let a = analyse(&m, &Params::default());
-    check_cover(&a, 300);
+    check_cover(&a.clips, 300);
 }
 
 #[test]
@@ -174,4 +174,33 @@ fn kept_gains_find_what_the_plain_greedy_search_finds() {
     let plain = clips::extract_with(&features, &paths, &p, frames, true);
     assert!(kept.len() > 5, "{} clips", kept.len());
     assert_eq!(kept, plain);
+}
+
+#[test]
+fn long_matches_make_a_played_again_take_one_repeated_clip() {
+    // A wander of 8 s, then the same 8 s again: the paper's greedy may cut
+    // the second playing into pieces; the long matches refer all of it,
+    // in one clip, to the first playing, frame for frame.
+    let half = 960;
+    let m = motion(2 * half, 5, |f, c| wander(f % half, c));
+    let a = analyse(&m, &Params::default());
+    check_cover(&a.matches, 2 * half);
+    let repeated: Vec<&Clip> = a
+        .matches
+        .iter()
+        .filter(|c| matches!(c.kind, ClipKind::Repeated { .. }))
+        .collect();
+    assert_eq!(repeated.len(), 1, "{:?}", a.matches);
+    let c = repeated[0];
+    assert!(c.end - c.start >= half * 9 / 10, "{}..{}", c.start, c.end);
+    let ClipKind::Repeated { reference, .. } = &c.kind else {
+        unreachable!()
+    };
+    for (t, &r) in (c.start..c.end).zip(reference) {
+        assert!(t.abs_diff(r + half) <= 4, "frame {t} refers to {r}");
+    }
+    // A take that never repeats has no long match.
+    let m = motion(720, 5, wander);
+    let a = analyse(&m, &Params::default());
+    check_cover(&a.matches, 720);
 }
