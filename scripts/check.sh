@@ -296,7 +296,7 @@ for b in $(mocap_hw_boards); do
 done
 step uf2 uf2_tests
 step nostd-decoder nostd_build mocap-decoder
-for f in codec-index codec-pca-spline codec-predictive codec-pattern entropy defmt; do
+for f in codec-index codec-pca-spline codec-predictive codec-pattern codec-rma entropy defmt; do
     step "nostd-decoder-$f" nostd_build mocap-decoder --features "$f"
 done
 step nostd-servo nostd_build mocap-servo

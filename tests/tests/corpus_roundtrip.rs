@@ -230,6 +230,11 @@ fn pattern_every_file_at_50mm_and_arms_10mm() {
 }
 
 #[test]
+fn rma_every_file_at_50mm_and_arms_10mm() {
+    every_motion_file(CodecChoice::Rma, "50mm+arms:10mm");
+}
+
+#[test]
 fn auto_picks_the_smaller_codec() {
     let Some(files) = corpus_files("cmu") else {
         return;
@@ -253,7 +258,8 @@ fn auto_picks_the_smaller_codec() {
         .len()
         .min(size(CodecChoice::PcaSpline).bytes.len())
         .min(size(CodecChoice::Predictive).bytes.len())
-        .min(size(CodecChoice::Pattern).bytes.len());
+        .min(size(CodecChoice::Pattern).bytes.len())
+        .min(size(CodecChoice::Rma).bytes.len());
     assert_eq!(auto.bytes.len(), best);
     assert_ne!(auto.codec, CodecChoice::Auto);
 }

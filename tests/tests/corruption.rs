@@ -170,3 +170,22 @@ fn pattern_mutants_never_panic() {
     let (ok, err) = hammer("35_17 pattern", &clip, 3000, 0x5A77);
     eprintln!("35_17 pattern: {ok} decoded, {err} rejected");
 }
+
+#[test]
+fn rma_mutants_never_panic() {
+    // The demo played twice: a repeated clip with its map and residual.
+    let once = generate::animatronic_demo();
+    let mut twice = once.clone();
+    twice.values.extend_from_slice(&once.values);
+    let clip = encode_with(&twice, CodecChoice::Rma, "20mm", None);
+    let (ok, err) = hammer("demo twice rma", &clip, 3000, 0x12AA);
+    eprintln!("demo twice rma: {ok} decoded, {err} rejected");
+    assert!(err > 0);
+    let Some(file) = corpus_file("cmu", "05_04.bvh") else {
+        return;
+    };
+    let m = bvh::read_file(&file).unwrap();
+    let clip = encode_with(&m, CodecChoice::Rma, "50mm", None);
+    let (ok, err) = hammer("05_04 rma", &clip, 3000, 0x05A4);
+    eprintln!("05_04 rma: {ok} decoded, {err} rejected");
+}

@@ -301,6 +301,24 @@ fn golden_pattern_clip() {
     );
 }
 
+/// `rma` (SPEC.md §12): the demo played twice at 20 mm — its second
+/// playing one repeated clip referring to the first (two knots) — and the
+/// demo alone, where no repetition pays (the empty plan before a body).
+#[test]
+fn golden_rma_clips() {
+    let once = demo();
+    let mut twice = once.clone();
+    twice.values.extend_from_slice(&once.values);
+    check_case(
+        "rma_demo_twice_20mm",
+        &motion_clip(&twice, CodecChoice::Rma, &["20mm"]),
+    );
+    check_case(
+        "rma_demo_20mm",
+        &motion_clip(&once, CodecChoice::Rma, &["20mm"]),
+    );
+}
+
 #[test]
 fn golden_servo_clips() {
     let m = demo();
@@ -423,6 +441,10 @@ fn golden_corpus_digests() {
         (
             "cmu/35_01 predictive 1deg",
             motion_clip(&walk, CodecChoice::Predictive, &["1deg"]),
+        ),
+        (
+            "cmu/05_04 rma 50mm+arms:10mm",
+            motion_clip(&arms, CodecChoice::Rma, &["50mm", "arms:10mm"]),
         ),
         (
             "iclone-cmu/002_01 pca-spline 20mm",

@@ -8,16 +8,24 @@ use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
 use mocap_encoder::{clipfile, generate, units};
 
 fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
-    let m = generate::animatronic_demo();
+    clip_of(&generate::animatronic_demo(), codec, "0.5deg", key_interval)
+}
+
+fn clip_of(
+    m: &mocap_encoder::motion::Motion,
+    codec: CodecChoice,
+    bound: &str,
+    key_interval: Option<u16>,
+) -> Vec<u8> {
     let opts = EncodeOptions {
         codec,
-        bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
-        metres_per_unit: units::detect(&m).metres(),
+        bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
+        metres_per_unit: units::detect(m).metres(),
         key_interval,
         index_layout: Default::default(),
         pattern: Default::default(),
     };
-    encode::encode(&m, &opts).unwrap().bytes
+    encode::encode(m, &opts).unwrap().bytes
 }
 
 /// Frame codecs and their key intervals (index) or block lengths
@@ -49,6 +57,60 @@ fn random_access_equals_sequential() {
             player.frame(f, &mut out).unwrap();
             let i = f as usize * n;
             assert_eq!(&out[..n], &all[i..i + n], "{codec:?} K={k} frame {f}");
+        }
+    }
+}
+
+/// `rma` (SPEC.md §12) on the demo played twice, its second playing a
+/// repeated clip: any frame in any order is the sequential decode's, and
+/// `sample_at` at a frame's time is that frame (between frames it fades
+/// the clip in and out, §12.4: the spec examples check that).
+#[test]
+fn rma_random_access_equals_sequential() {
+    let once = generate::animatronic_demo();
+    let mut twice = once.clone();
+    twice.values.extend_from_slice(&once.values);
+    let bytes = clip_of(&twice, CodecChoice::Rma, "20mm", None);
+    let clip = Clip::parse(&bytes).unwrap();
+    let section = clip
+        .sections()
+        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)
+        .expect("an rma section");
+    let info = mocap_encoder::codec::rma::section::inspect(section.bytes).unwrap();
+    assert_eq!(info.repeated, 1, "the second playing is a repeated clip");
+    let all = clipfile::decode_all(&clip).unwrap();
+    let h = clip.header();
+    let (n, frames, period) = (
+        h.channel_count(),
+        h.frame_count(),
+        u64::from(h.frame_time_ns()),
+    );
+    let mut player = Player::<512>::new(&clip).unwrap();
+    let mut out = [0i32; 64];
+    let mut f = 7u32;
+    for _ in 0..900 {
+        f = (f * 1103 + 12345) % frames;
+        player.frame(f, &mut out).unwrap();
+        let i = f as usize * n;
+        assert_eq!(&out[..n], &all[i..i + n], "rma frame {f}");
+    }
+    for f in (0..frames).rev().step_by(7).chain(0..frames) {
+        // Frame times rounded up to whole microseconds fall under 1 µs
+        // after the frame: within two counts of it (the body's step and the
+        // clip's fade each round down once), or of the step to the next
+        // frame scaled by that microsecond.
+        player
+            .sample_at((u64::from(f) * period).div_ceil(1000), &mut out)
+            .unwrap();
+        let i = f as usize * n;
+        let j = (f as usize + 1).min(frames as usize - 1) * n;
+        for c in 0..n {
+            let (o, a, b) = (out[c], all[i + c], all[j + c]);
+            let slack = 2 + a.abs_diff(b) / 4096;
+            assert!(
+                o.abs_diff(a) <= slack,
+                "rma sample at frame {f} channel {c}: {o} vs {a}"
+            );
         }
     }
 }

@@ -212,6 +212,25 @@ fn pattern_firmware_output_matches_host_on_every_core() {
     }
 }
 
+/// rma clips: every frame and 50 Hz samples (the clips fade in and out
+/// between frames, SPEC.md §12.4): the demo played twice (its second
+/// playing a repeated clip) and 05_04, whose rma clip at 50 mm keeps one.
+#[test]
+fn rma_firmware_output_matches_host_on_every_core() {
+    if !qemu_available() {
+        return;
+    }
+    let codec = CodecChoice::Rma;
+    let once = generate::animatronic_demo();
+    let mut twice = once.clone();
+    twice.values.extend_from_slice(&once.values);
+    check_frames_and_samples("rma-demo-twice", &twice, codec, "20mm");
+    if let Some(f) = corpus_file("cmu", "05_04.bvh") {
+        let m = bvh::read_file(&f).unwrap();
+        check_frames_and_samples("rma-cmu-05_04", &m, codec, "50mm");
+    }
+}
+
 /// predictive clips: every frame and 50 Hz samples (the range decoder's
 /// state carried from frame to frame), and a predictive servo clip played
 /// in servo mode against `mocap play`.

@@ -190,11 +190,12 @@ pub fn encode_with(
 }
 
 /// The codecs `auto` encodes with, in this order.
-pub const AUTO_CODECS: [CodecChoice; 4] = [
+pub const AUTO_CODECS: [CodecChoice; 5] = [
     CodecChoice::Index,
     CodecChoice::PcaSpline,
     CodecChoice::Predictive,
     CodecChoice::Pattern,
+    CodecChoice::Rma,
 ];
 
 /// `auto`'s choice among the codecs' results (in [`AUTO_CODECS`] order): the

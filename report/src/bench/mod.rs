@@ -31,7 +31,7 @@ pub use baseline::Baseline;
 /// What a row is coded with: one of our codecs or a baseline.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
-    /// A codec of the format (`auto`: the smallest of the three).
+    /// A codec of the format (`auto`: the smallest of [`AUTO_CODECS`]).
     Codec(CodecChoice),
     /// A size reference.
     Baseline(Baseline),
