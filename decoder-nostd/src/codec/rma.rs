@@ -188,8 +188,9 @@ impl<'a> RmaCodec<'a> {
 
     /// Decodes the pose at `pos` (frames, 16.16; at most the last frame)
     /// into `out`. `state` holds the clip cursor, then a scratch pose of
-    /// `C` words, then the body's key-interval caches (split between the
-    /// two positions); `segment` and `reference` are the body's segment
+    /// `C` words, then the body's key-interval caches (split in halves
+    /// between the two positions, all for `t` in a section without repeated
+    /// clips); `segment` and `reference` are the body's segment
     /// cursors for `t` and `Ref(t)`. `None` only if an invariant of the
     /// validated section is broken or `state` is shorter than
     /// [`RmaCodec::state_words`].
@@ -210,7 +211,12 @@ impl<'a> RmaCodec<'a> {
         let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
         let (cursor, rest) = state.split_at_mut_checked(CURSOR_WORDS)?;
         let (scratch, caches) = rest.split_at_mut_checked(self.channels)?;
-        let half = caches.len() / 2;
+        // Without repeated clips the body at `t` is all there is to cache.
+        let half = if self.clips.is_empty() {
+            caches.len()
+        } else {
+            caches.len() / 2
+        };
         let (cache_t, cache_ref) = caches.split_at_mut(half);
         let near = self.clips_near(frame, cursor)?;
         self.body.decode_at(pos, segment, out, cache_t)?;

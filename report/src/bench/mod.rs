@@ -78,6 +78,8 @@ pub struct Row {
     pub holds: bool,
     /// Key interval chosen (index codec; predictive block length).
     pub key_interval: u16,
+    /// Frames in repeated clips (`rma` clips; `None` for the others).
+    pub repeated_frames: Option<usize>,
     /// Wall-clock seconds of the encode (search included; `auto` derived
     /// from the three codecs' rows: the sum of their times).
     pub encode_seconds: f64,
@@ -257,6 +259,15 @@ fn clip_header_bytes(clip: &[u8]) -> usize {
     }
 }
 
+/// Frames in the repeated clips of an `rma` clip (`None` for other codecs).
+fn repeated_frames(clip: &[u8]) -> Option<usize> {
+    let c = mocap_decoder::Clip::parse(clip).ok()?;
+    let section = c
+        .sections()
+        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)?;
+    Some(mocap_encoder::codec::rma::section::inspect(section.bytes)?.repeated_frames)
+}
+
 /// The parts of a row every method fills the same way.
 struct RowOf<'a> {
     source: &'a Source,
@@ -268,14 +279,17 @@ struct RowOf<'a> {
 impl RowOf<'_> {
     /// The row of one of our clips.
     fn clip(&self, method: Method, enc: &Encoded, encode_seconds: f64) -> Row {
-        self.row(
-            method,
-            enc.codec.name(),
-            enc.metrics.clone(),
-            clip_header_bytes(&enc.bytes),
-            enc.key_interval,
-            encode_seconds,
-        )
+        Row {
+            repeated_frames: repeated_frames(&enc.bytes),
+            ..self.row(
+                method,
+                enc.codec.name(),
+                enc.metrics.clone(),
+                clip_header_bytes(&enc.bytes),
+                enc.key_interval,
+                encode_seconds,
+            )
+        }
     }
 
     fn row(
@@ -314,6 +328,7 @@ impl RowOf<'_> {
             bits_per_value: 8.0 * without as f64 / values.max(1) as f64,
             metrics,
             key_interval,
+            repeated_frames: None,
             encode_seconds,
         }
     }
@@ -471,7 +486,7 @@ pub fn run_with(
 /// Both tables: every row, then the per-folder totals ([`summary`]).
 pub fn markdown(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio f32 w/o header | ratio file | bits/ch/frame | ARMS mm | max mm | d % | angle RMS ° | angle max ° | holds | K | encode s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio f32 w/o header | ratio file | bits/ch/frame | ARMS mm | max mm | d % | angle RMS ° | angle max ° | holds | K | repeated frames | encode s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let m = &r.metrics;
@@ -481,11 +496,13 @@ pub fn markdown(rows: &[Row]) -> String {
             format!("{} ({})", r.codec, r.chosen)
         };
         s += &format!(
-            "| {} | {} | {codec} | {} | {}×{} | {} | {:.2} | {:.2} | {:.1} | {:.3} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | {:.2} |\n",
+            "| {} | {} | {codec} | {} | {}×{} | {} | {:.2} | {:.2} | {:.1} | {:.3} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | {} | {:.2} |\n",
             r.group, r.file, r.bound, m.frames, m.channels, m.bytes, m.ratio_f32,
             r.ratio_f32_without_header, m.ratio_file, r.bits_per_value,
             m.arms_mm, m.max_joint_err_mm, m.distortion_pct, m.angle_rms_deg, m.angle_max_deg,
-            if r.holds { "yes" } else { "**no**" }, r.key_interval, r.encode_seconds
+            if r.holds { "yes" } else { "**no**" }, r.key_interval,
+            r.repeated_frames.map_or_else(|| "–".to_string(), |f| format!("{f} ({:.1} %)", 100.0 * f as f64 / m.frames.max(1) as f64)),
+            r.encode_seconds
         );
     }
     s.push('\n');
