@@ -9,7 +9,9 @@
 //! earlier side wherever neither side is taken yet, the references of a
 //! clip lie before its first frame (so a clip never refers to itself, and
 //! the body read there is the take's own motion, SPEC.md §12.3), and a
-//! frame that is referred to is never made a repeated one afterwards.
+//! frame that is referred to is never made a repeated one afterwards; a
+//! path into a repeated stretch refers to what that stretch refers to, so
+//! the third playing of a movement points at the first like the second.
 
 use super::clips::{Clip, ClipKind};
 use super::{Features, Params, Path};
@@ -38,13 +40,12 @@ pub fn extract(f: &Features, paths: &[Path], p: &Params, frames: usize) -> Vec<C
             // The longest run from t: free frames whose references are free
             // of repetition and lie before the run's first frame.
             let s = start + t;
+            // A reference into a repeated frame goes on to that frame's
+            // own reference (one step: references are never repeated).
+            let resolve = |r: usize| repeated.get(r).copied().flatten().unwrap_or(r);
             let ok = |u: usize| {
-                let (frame, r) = (start + u, refs[u]);
-                frame < len
-                    && repeated[frame].is_none()
-                    && !referred[frame]
-                    && r < s
-                    && repeated[r].is_none()
+                let frame = start + u;
+                frame < len && repeated[frame].is_none() && !referred[frame] && resolve(refs[u]) < s
             };
             if !ok(t) {
                 t += 1;
@@ -55,9 +56,10 @@ pub fn extract(f: &Features, paths: &[Path], p: &Params, frames: usize) -> Vec<C
                 e += 1;
             }
             if e - t >= min {
-                for u in t..e {
-                    repeated[start + u] = Some(refs[u]);
-                    referred[refs[u]] = true;
+                let resolved: Vec<usize> = refs[t..e].iter().map(|&r| resolve(r)).collect();
+                for (u, r) in (t..e).zip(resolved) {
+                    repeated[start + u] = Some(r);
+                    referred[r] = true;
                 }
             }
             t = e;
@@ -108,7 +110,7 @@ fn to_clips(repeated: &[Option<usize>], step: usize, frames: usize) -> Vec<Clip>
             }
             Some(_) => {
                 while e < len
-                    && matches!((repeated[e - 1], repeated[e]), (Some(a), Some(b)) if b >= a && b <= a + 2)
+                    && matches!((repeated[e - 1], repeated[e]), (Some(a), Some(b)) if b + 1 >= a && b <= a + 4)
                 {
                     e += 1;
                 }

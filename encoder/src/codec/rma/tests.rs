@@ -177,30 +177,43 @@ fn kept_gains_find_what_the_plain_greedy_search_finds() {
 }
 
 #[test]
-fn long_matches_make_a_played_again_take_one_repeated_clip() {
-    // A wander of 8 s, then the same 8 s again: the paper's greedy may cut
-    // the second playing into pieces; the long matches refer all of it,
-    // in one clip, to the first playing, frame for frame.
-    let half = 960;
-    let m = motion(2 * half, 5, |f, c| wander(f % half, c));
+fn long_matches_refer_every_playing_again_to_the_first() {
+    // A wander of 8 s played three times: the paper's greedy may cut the
+    // later playings into pieces; the long matches make each one repeated
+    // clip referring, frame for frame, to the first playing (the third
+    // through the second's references, which are never repeated frames).
+    let once = 960;
+    let m = motion(3 * once, 5, |f, c| wander(f % once, c));
     let a = analyse(&m, &Params::default());
-    check_cover(&a.matches, 2 * half);
+    check_cover(&a.matches, 3 * once);
     let repeated: Vec<&Clip> = a
         .matches
         .iter()
         .filter(|c| matches!(c.kind, ClipKind::Repeated { .. }))
         .collect();
-    assert_eq!(repeated.len(), 1, "{:?}", a.matches);
-    let c = repeated[0];
-    assert!(c.end - c.start >= half * 9 / 10, "{}..{}", c.start, c.end);
-    let ClipKind::Repeated { reference, .. } = &c.kind else {
-        unreachable!()
-    };
-    for (t, &r) in (c.start..c.end).zip(reference) {
-        assert!(t.abs_diff(r + half) <= 4, "frame {t} refers to {r}");
+    assert_eq!(repeated.len(), 2, "{:?}", a.matches);
+    for c in repeated {
+        assert!(c.end - c.start >= once * 9 / 10, "{}..{}", c.start, c.end);
+        let ClipKind::Repeated { reference, .. } = &c.kind else {
+            unreachable!()
+        };
+        for (t, &r) in (c.start..c.end).zip(reference) {
+            assert!(
+                r < once,
+                "frame {t} refers to {r}, not to the first playing"
+            );
+            assert!((t % once).abs_diff(r) <= 4, "frame {t} refers to {r}");
+        }
     }
-    // A take that never repeats has no long match.
+    // A take that never repeats has few long matches.
     let m = motion(720, 5, wander);
     let a = analyse(&m, &Params::default());
     check_cover(&a.matches, 720);
+    let rep: usize = a
+        .matches
+        .iter()
+        .filter(|c| matches!(c.kind, ClipKind::Repeated { .. }))
+        .map(|c| c.end - c.start)
+        .sum();
+    assert!(rep < 720 / 3, "repeated {rep} of 720");
 }
