@@ -94,6 +94,16 @@ fn rma_random_access_equals_sequential() {
         let i = f as usize * n;
         assert_eq!(&out[..n], &all[i..i + n], "rma frame {f}");
     }
+    // A player too small to cache the body whole (its cursor, the scratch
+    // pose, then a few words for the body at t and none for Ref(t)) plays
+    // the same frames.
+    let mut small = Player::<{ 2 + 42 + 60 }>::new(&clip).unwrap();
+    for _ in 0..900 {
+        f = (f * 1103 + 12345) % frames;
+        small.frame(f, &mut out).unwrap();
+        let i = f as usize * n;
+        assert_eq!(&out[..n], &all[i..i + n], "rma frame {f}, small player");
+    }
     for f in (0..frames).rev().step_by(7).chain(0..frames) {
         // Frame times rounded up to whole microseconds fall under 1 µs
         // after the frame: within two counts of it (the body's step and the

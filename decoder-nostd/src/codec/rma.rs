@@ -42,6 +42,9 @@ pub(crate) struct RmaCodec<'a> {
     /// The repeated clip records (§12.2).
     clips: &'a [u8],
     body: PcaSplineCodec<'a>,
+    /// Words of the body's cache that hold every group of its largest
+    /// segment: what the body at `t` gets first of the player's words.
+    t_cache: usize,
 }
 
 /// One repeated clip: its first and last frame and its knots, still coded.
@@ -121,12 +124,14 @@ impl<'a> RmaCodec<'a> {
         let clips = rest.get(..at).ok_or(truncated)?;
         let body_bytes = rest.get(at..).unwrap_or(&[]);
         let body = PcaSplineCodec::parse(body_bytes, channels, frames)?;
+        let t_cache = body.full_cache_words();
         Ok(RmaCodec {
             channels,
             frames,
             runs,
             clips,
             body,
+            t_cache,
         })
     }
 
@@ -188,9 +193,9 @@ impl<'a> RmaCodec<'a> {
 
     /// Decodes the pose at `pos` (frames, 16.16; at most the last frame)
     /// into `out`. `state` holds the clip cursor, then a scratch pose of
-    /// `C` words, then the body's key-interval caches (split in halves
-    /// between the two positions, all for `t` in a section without repeated
-    /// clips); `segment` and `reference` are the body's segment
+    /// `C` words, then the body's key-interval caches: for `t` as many
+    /// words as cache its largest segment whole, the rest for `Ref(t)`
+    /// (all for `t` in a section without repeated clips); `segment` and `reference` are the body's segment
     /// cursors for `t` and `Ref(t)`. `None` only if an invariant of the
     /// validated section is broken or `state` is shorter than
     /// [`RmaCodec::state_words`].
@@ -211,11 +216,12 @@ impl<'a> RmaCodec<'a> {
         let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
         let (cursor, rest) = state.split_at_mut_checked(CURSOR_WORDS)?;
         let (scratch, caches) = rest.split_at_mut_checked(self.channels)?;
-        // Without repeated clips the body at `t` is all there is to cache.
+        // The body at `t` (every pose) is cached whole first; the body at
+        // `Ref(t)` (repeated poses only) gets what is left.
         let half = if self.clips.is_empty() {
             caches.len()
         } else {
-            caches.len() / 2
+            self.t_cache.min(caches.len())
         };
         let (cache_t, cache_ref) = caches.split_at_mut(half);
         let near = self.clips_near(frame, cursor)?;

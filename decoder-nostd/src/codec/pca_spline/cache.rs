@@ -486,6 +486,39 @@ impl<'a> PcaSplineCodec<'a> {
         })
     }
 
+    /// Words of a cache that holds every group of every segment and the
+    /// constants (what [`Self::prepare`] fills at most); read once, when a
+    /// codec built on this body decides how to share a player's words.
+    pub(crate) fn full_cache_words(&self) -> usize {
+        let mut most = 0usize;
+        let mut at = 0usize;
+        while let Some(seg) = self.segment_at(at) {
+            let mut g = Reader::new(self.groups);
+            let mut body = Reader::new(seg.body);
+            let mut words = CACHE_HEAD.wrapping_add(self.const_count as usize);
+            for _ in 0..self.group_count {
+                let n = g.varint_u32().unwrap_or(0) as usize;
+                if g.take(n.wrapping_mul(self.width())).is_none() {
+                    break;
+                }
+                let Some(group) = read_group(&mut body, n) else {
+                    break;
+                };
+                words = words.wrapping_add(GROUP_HEAD.wrapping_add(if group.k == 0 {
+                    n
+                } else {
+                    INTERVAL.wrapping_add(group.k.wrapping_mul(4))
+                }));
+            }
+            most = most.max(words);
+            if seg.next <= at {
+                break;
+            }
+            at = seg.next;
+        }
+        most
+    }
+
     /// Fills the cache head and as many group slots as fit for `seg`, each
     /// group's key interval the one holding `rel`.
     pub(super) fn prepare(
