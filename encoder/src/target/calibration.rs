@@ -5,7 +5,7 @@ use super::chips::Core;
 use super::cost::{CodecKind, Model};
 
 /// `size_of::<Player<0>>()` on a 32-bit core (the firmware's `state_bytes` less 4 per word).
-pub const PLAYER_FIXED_BYTES: usize = 176;
+pub const PLAYER_FIXED_BYTES: usize = 248;
 
 /// The decoder's code per core, every codec linked (`scripts/firmware.sh size`).
 pub const DECODER_CODE_BYTES: &[(Core, usize)] = &[
