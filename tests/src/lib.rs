@@ -321,6 +321,16 @@ pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
     encode::encode(m, &opts).unwrap().bytes
 }
 
+/// The shipped demo played twice in a row: the `rma` codec's case of a
+/// take whose second half repeats its first exactly (random access,
+/// corruption and QEMU parity; the golden clip doubles the shipped BVH).
+pub fn demo_played_twice() -> mocap_encoder::motion::Motion {
+    let mut twice = mocap_encoder::generate::animatronic_demo();
+    let frames = twice.values.clone();
+    twice.values.extend_from_slice(&frames);
+    twice
+}
+
 /// The shipped demo clip (480 frames, 60 Hz, cm) sent far: its root
 /// travels 150 m along X and its heading winds 200 turns (150° a frame).
 /// No `index` key table holds that to 1 mm / 1°, so its `index` clip

@@ -174,9 +174,7 @@ fn pattern_mutants_never_panic() {
 #[test]
 fn rma_mutants_never_panic() {
     // The demo played twice: a repeated clip with its map and residual.
-    let once = generate::animatronic_demo();
-    let mut twice = once.clone();
-    twice.values.extend_from_slice(&once.values);
+    let twice = mocap_tests::demo_played_twice();
     let clip = encode_with(&twice, CodecChoice::Rma, "20mm", None);
     let (ok, err) = hammer("demo twice rma", &clip, 3000, 0x12AA);
     eprintln!("demo twice rma: {ok} decoded, {err} rejected");

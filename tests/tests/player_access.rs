@@ -67,9 +67,7 @@ fn random_access_equals_sequential() {
 /// the clip in and out, §12.4: the spec examples check that).
 #[test]
 fn rma_random_access_equals_sequential() {
-    let once = generate::animatronic_demo();
-    let mut twice = once.clone();
-    twice.values.extend_from_slice(&once.values);
+    let twice = mocap_tests::demo_played_twice();
     let bytes = clip_of(&twice, CodecChoice::Rma, "20mm", None);
     let clip = Clip::parse(&bytes).unwrap();
     let section = clip

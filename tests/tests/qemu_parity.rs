@@ -221,9 +221,7 @@ fn rma_firmware_output_matches_host_on_every_core() {
         return;
     }
     let codec = CodecChoice::Rma;
-    let once = generate::animatronic_demo();
-    let mut twice = once.clone();
-    twice.values.extend_from_slice(&once.values);
+    let twice = mocap_tests::demo_played_twice();
     check_frames_and_samples("rma-demo-twice", &twice, codec, "20mm");
     if let Some(f) = corpus_file("cmu", "05_04.bvh") {
         let m = bvh::read_file(&f).unwrap();
