@@ -666,10 +666,10 @@ fn bench_prints_baselines_beside_the_codecs() {
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);
     assert!(
-        out.starts_with("| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio f32 w/o header | ratio file | bits/ch/frame | ARMS mm | max mm | d % | angle RMS ° | angle max ° | holds | K | repeated frames | encode s |\n"),
+        out.starts_with("| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio f32 w/o header | ratio file | bits/ch/frame | ARMS mm | max mm | d % | angle RMS ° | angle max ° | foot slide mm/s (source) | foot h mm | holds | K | repeated frames | encode s |\n"),
         "{out}"
     );
-    assert!(out.contains("| folder | codec | bound | files | total f32 bytes | total bytes | ratio f32 | ratio f32 w/o header | bits/ch/frame | worst ARMS mm | worst max mm | worst angle max ° | mean d % | bound holds | encode s |\n"), "{out}");
+    assert!(out.contains("| folder | codec | bound | files | total f32 bytes | total bytes | ratio f32 | ratio f32 w/o header | bits/ch/frame | worst ARMS mm | worst max mm | worst angle max ° | mean d % | foot slide mm/s (source) | foot h mm | bound holds | encode s |\n"), "{out}");
     for method in [
         "index",
         "raw16",

@@ -15,6 +15,7 @@ pub mod bvh;
 pub mod c3d;
 pub mod clipfile;
 pub mod codec;
+pub mod contacts;
 pub mod container;
 pub mod encode;
 pub mod entropy;

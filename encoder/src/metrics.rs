@@ -4,6 +4,7 @@
 
 use serde::Serialize;
 
+use crate::contacts::Contacts;
 use crate::fixed::wrap_degrees;
 use crate::kinematics;
 use crate::motion::Motion;
@@ -33,6 +34,15 @@ pub struct Metrics {
     pub angle_max_deg: f64,
     /// Largest translation-channel error, mm.
     pub position_max_mm: f64,
+    /// Foot-frame pairs where the source's feet are planted
+    /// ([`crate::contacts`]); the three foot figures are means over them.
+    pub foot_pairs: usize,
+    /// Mean horizontal speed of the decoded feet there, mm/s (foot slide).
+    pub foot_slide_mm_s: f64,
+    /// The source's own, mm/s (what a lossless decode shows).
+    pub foot_slide_source_mm_s: f64,
+    /// Mean vertical error of the decoded feet there, mm.
+    pub foot_height_err_mm: f64,
     /// Frames.
     pub frames: usize,
     /// Channels per frame.
@@ -106,6 +116,13 @@ pub fn compare_frames(
     let joints = original.skeleton.joints.len().max(1);
     let mm = metres_per_unit * 1000.0;
     let kinds = original.skeleton.channel_kinds();
+    let contacts = Contacts::find(
+        &original.skeleton,
+        &a[..(frames * joints).min(a.len())],
+        original.frame_time,
+    );
+    let mut feet = contacts.meter(a, joints, original.frame_time);
+    let mut b_mm = Vec::with_capacity(joints);
 
     let mut arms_sum = 0.0;
     let mut max_err = 0.0f64;
@@ -118,9 +135,12 @@ pub fn compare_frames(
     for f in 0..frames {
         decoded_frame(f, &mut y);
         kinematics::joint_positions(decoded_skeleton, &y, &mut b);
+        b_mm.clear();
+        b_mm.extend(b.iter().map(|p| p.map(|v| v * mm)));
+        feet.frame(&b_mm);
         let mut frame_sq = 0.0;
         for j in 0..joints {
-            let (p, q) = (a[f * joints + j], b[j].map(|v| v * mm));
+            let (p, q) = (a[f * joints + j], b_mm[j]);
             let d2: f64 = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum();
             frame_sq += d2;
             if d2.sqrt() > max_err {
@@ -156,6 +176,7 @@ pub fn compare_frames(
     }
 
     let raw = frames * channels * 4;
+    let foot = feet.error();
     Metrics {
         bytes,
         ratio_f32: raw as f64 / bytes.max(1) as f64,
@@ -180,6 +201,10 @@ pub fn compare_frames(
         },
         angle_max_deg: ang_max,
         position_max_mm: pos_max,
+        foot_pairs: foot.pairs,
+        foot_slide_mm_s: foot.slide_mm_s,
+        foot_slide_source_mm_s: foot.source_slide_mm_s,
+        foot_height_err_mm: foot.height_err_mm,
         frames,
         channels,
     }

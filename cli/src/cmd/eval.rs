@@ -72,6 +72,13 @@ pub fn run(a: Args) -> super::Result {
             "angle RMS / max  {:.4}° / {:.4}°",
             x.angle_rms_deg, x.angle_max_deg
         );
+        if x.foot_pairs > 0 {
+            println!(
+                "foot slide       {:.1} mm/s (source {:.1} mm/s) over {} planted foot-frames",
+                x.foot_slide_mm_s, x.foot_slide_source_mm_s, x.foot_pairs
+            );
+            println!("foot height err  {:.2} mm", x.foot_height_err_mm);
+        }
         println!("frames×channels  {}×{}", x.frames, x.channels);
     }
     Ok(())

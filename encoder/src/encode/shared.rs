@@ -59,6 +59,9 @@ fn worst(all: &[&Metrics]) -> Metrics {
         w.angle_rms_deg = w.angle_rms_deg.max(m.angle_rms_deg);
         w.position_max_mm = w.position_max_mm.max(m.position_max_mm);
         w.distortion_pct = w.distortion_pct.max(m.distortion_pct);
+        w.foot_slide_mm_s = w.foot_slide_mm_s.max(m.foot_slide_mm_s);
+        w.foot_slide_source_mm_s = w.foot_slide_source_mm_s.max(m.foot_slide_source_mm_s);
+        w.foot_height_err_mm = w.foot_height_err_mm.max(m.foot_height_err_mm);
     }
     w
 }

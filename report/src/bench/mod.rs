@@ -486,7 +486,7 @@ pub fn run_with(
 /// Both tables: every row, then the per-folder totals ([`summary`]).
 pub fn markdown(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio f32 w/o header | ratio file | bits/ch/frame | ARMS mm | max mm | d % | angle RMS ° | angle max ° | holds | K | repeated frames | encode s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| folder | file | codec | bound | frames×ch | bytes | ratio f32 | ratio f32 w/o header | ratio file | bits/ch/frame | ARMS mm | max mm | d % | angle RMS ° | angle max ° | foot slide mm/s (source) | foot h mm | holds | K | repeated frames | encode s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let m = &r.metrics;
@@ -496,10 +496,12 @@ pub fn markdown(rows: &[Row]) -> String {
             format!("{} ({})", r.codec, r.chosen)
         };
         s += &format!(
-            "| {} | {} | {codec} | {} | {}×{} | {} | {:.2} | {:.2} | {:.1} | {:.3} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | {} | {:.2} |\n",
+            "| {} | {} | {codec} | {} | {}×{} | {} | {:.2} | {:.2} | {:.1} | {:.3} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3} | {} | {} | {} | {} | {} | {:.2} |\n",
             r.group, r.file, r.bound, m.frames, m.channels, m.bytes, m.ratio_f32,
             r.ratio_f32_without_header, m.ratio_file, r.bits_per_value,
             m.arms_mm, m.max_joint_err_mm, m.distortion_pct, m.angle_rms_deg, m.angle_max_deg,
+            foot_slide(m.foot_pairs, m.foot_slide_mm_s, m.foot_slide_source_mm_s),
+            if m.foot_pairs > 0 { format!("{:.2}", m.foot_height_err_mm) } else { "–".into() },
             if r.holds { "yes" } else { "**no**" }, r.key_interval,
             r.repeated_frames.map_or_else(|| "–".to_string(), |f| format!("{f} ({:.1} %)", 100.0 * f as f64 / m.frames.max(1) as f64)),
             r.encode_seconds
@@ -507,6 +509,15 @@ pub fn markdown(rows: &[Row]) -> String {
     }
     s.push('\n');
     s + &summary(rows)
+}
+
+/// A foot slide cell: the decoded feet's and, in brackets, the source's
+/// (mm/s); a dash when the source never plants a foot.
+fn foot_slide(pairs: usize, slide: f64, source: f64) -> String {
+    if pairs == 0 {
+        return "–".into();
+    }
+    format!("{slide:.0} ({source:.0})")
 }
 
 /// Whether a row is a baseline's.
@@ -596,7 +607,7 @@ pub fn versus(rows: &[Row]) -> String {
 /// with and without the header; bits per channel per frame are without it.
 pub fn summary(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| folder | codec | bound | files | total f32 bytes | total bytes | ratio f32 | ratio f32 w/o header | bits/ch/frame | worst ARMS mm | worst max mm | worst angle max ° | mean d % | bound holds | encode s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| folder | codec | bound | files | total f32 bytes | total bytes | ratio f32 | ratio f32 w/o header | bits/ch/frame | worst ARMS mm | worst max mm | worst angle max ° | mean d % | foot slide mm/s (source) | foot h mm | bound holds | encode s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for sel in summary_groups(rows) {
         let Some(first) = sel.first() else { continue };
@@ -607,8 +618,26 @@ pub fn summary(rows: &[Row]) -> String {
         let d = sel.iter().map(|r| r.metrics.distortion_pct).sum::<f64>() / sel.len() as f64;
         let secs: f64 = sel.iter().map(|r| r.encode_seconds).sum();
         let holds = sel.iter().filter(|r| r.holds).count();
+        // Foot figures weighed by each file's planted foot-frames.
+        let pairs: usize = sel.iter().map(|r| r.metrics.foot_pairs).sum();
+        let mean = |f: fn(&Row) -> f64| {
+            sel.iter()
+                .map(|r| f(r) * r.metrics.foot_pairs as f64)
+                .sum::<f64>()
+                / pairs.max(1) as f64
+        };
+        let slide = foot_slide(
+            pairs,
+            mean(|r| r.metrics.foot_slide_mm_s),
+            mean(|r| r.metrics.foot_slide_source_mm_s),
+        );
+        let height = if pairs > 0 {
+            format!("{:.2}", mean(|r| r.metrics.foot_height_err_mm))
+        } else {
+            "–".into()
+        };
         s += &format!(
-            "| {} | {} | {} | {} | {f32b} | {total} | {:.2} | {:.2} | {:.3} | {:.2} | {:.1} | {:.3} | {d:.2} | {holds}/{} | {secs:.2} |\n",
+            "| {} | {} | {} | {} | {f32b} | {total} | {:.2} | {:.2} | {:.3} | {:.2} | {:.1} | {:.3} | {d:.2} | {slide} | {height} | {holds}/{} | {secs:.2} |\n",
             first.group,
             first.codec,
             first.bound,

@@ -38,8 +38,7 @@ pub fn pca_weights(
                 return 1e-3;
             }
             let j = joint_of[c];
-            let name = m.skeleton.joints[j].name.to_ascii_lowercase();
-            let foot = ["foot", "toe", "ankle"].iter().any(|f| name.contains(f));
+            let foot = crate::contacts::is_foot_name(&m.skeleton.joints[j].name);
             // Joints that move nothing measured still get a small weight
             // so they do not wander.
             let mixed = (1.0 - beta) * levers_um[j] + beta * kappa * rms[j];
