@@ -753,6 +753,65 @@ fn bench_prints_baselines_beside_the_codecs() {
 
 /// `mocap bench` reads a C3D marker file: marker rows at a length bound,
 /// the angle bound skipped with a note.
+/// `mocap encode --codec rma --plot`: the demo played twice keeps its
+/// second playing as one repeated clip, and the picture says so; `--plot`
+/// with another codec is refused with what to use instead.
+#[test]
+fn encode_rma_plots_the_analysis_and_the_kept_clips() {
+    let d = out_dir("rma_plot");
+    let (twice, clip, plot) = (
+        d.join("twice.bvh"),
+        d.join("twice.mcb"),
+        d.join("twice.svg"),
+    );
+    let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let o = mocap(&[
+        "generate",
+        "long",
+        "--from",
+        "assets/animatronic_demo.bvh",
+        "--frames",
+        "960",
+        "-o",
+        &path(&twice),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let o = mocap(&[
+        "encode",
+        &path(&twice),
+        "-o",
+        &path(&clip),
+        "--codec",
+        "rma",
+        "--max-error",
+        "20mm",
+        "--plot",
+        &path(&plot),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("the clip keeps 1 repeated clip over"),
+        "{}",
+        text(&o.stderr)
+    );
+    let svg = std::fs::read_to_string(&plot).expect("plot");
+    assert!(svg.contains("kept in the clip: 1 repeated clip "), "{svg}");
+    let e = failure(&[
+        "encode",
+        "assets/animatronic_demo.bvh",
+        "-o",
+        &path(&clip),
+        "--codec",
+        "index",
+        "--plot",
+        &path(&plot),
+    ]);
+    assert!(
+        e.contains("--plot draws the repeated-motion analysis of --codec rma"),
+        "{e}"
+    );
+}
+
 #[test]
 fn bench_reads_a_c3d_marker_file() {
     let d = out_dir("bench-c3d");

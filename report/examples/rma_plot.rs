@@ -1,6 +1,7 @@
-//! The repeated motion analysis of one take as a picture (issue 14's
-//! `--plot`, until the `rma` codec's `mocap encode --plot` draws it):
-//! the self-distance plot with its similar-posture paths and the clips.
+//! The repeated motion analysis of one take as a picture: the
+//! self-distance plot with its similar-posture paths and the clips, without
+//! encoding (`mocap encode --codec rma --plot` draws it with what the
+//! encoder kept).
 //!
 //! ```sh
 //! cargo run --release -p mocap-report --example rma_plot -- ../shared/data/cmu-long/01_14.bvh target/rma_01_14.png
@@ -20,7 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let m = input::read_motion(take, None)?.motion;
     let a = rma::analyse(&m, &Params::default());
     let name = take.file_name().unwrap_or_default().to_string_lossy();
-    self_distance_plot(out, &a, &name)?;
+    self_distance_plot(out, &a, None, &name)?;
     let [p, r, u] = a.frames_by_kind();
     println!(
         "{}: primary {p}, repeated {r}, unique {u} frames; wrote {}",

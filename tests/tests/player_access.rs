@@ -76,6 +76,15 @@ fn rma_random_access_equals_sequential() {
         .expect("an rma section");
     let info = mocap_encoder::codec::rma::section::inspect(section.bytes).unwrap();
     assert_eq!(info.repeated, 1, "the second playing is a repeated clip");
+    // Read back as written: it lies in the second playing and refers to
+    // the first.
+    let kept = &info.clips[0];
+    let half = twice.frames() as u32 / 2;
+    assert_eq!(info.repeated_frames, (kept.last - kept.start + 1) as usize);
+    assert!(
+        kept.primary.1 < kept.start && kept.primary.1 < half && kept.last >= half,
+        "{kept:?}"
+    );
     let all = clipfile::decode_all(&clip).unwrap();
     let h = clip.header();
     let (n, frames, period) = (

@@ -77,6 +77,12 @@ pub struct Args {
     /// `pattern_layout`.
     #[arg(long, value_parser = parse_pattern_layout, default_value = "packed")]
     pattern_layout: mocap_encoder::codec::pattern::Layout,
+    /// With `--codec rma` (or `auto`): draw the repeated-motion analysis
+    /// for tuning it (`.png` or `.svg`): the self-distance plot with its
+    /// similar-posture paths, the analysis's primary / repeated / unique
+    /// clips, and the repeated clips the encoder kept with their `Ref(t)`.
+    #[arg(long)]
+    plot: Option<PathBuf>,
     /// Also write the clip as a source file beside the output.
     #[arg(long, value_enum)]
     emit: Option<Emit>,
@@ -171,6 +177,13 @@ pub fn run(a: Args) -> super::Result {
     let chip = chip_of(&a)?;
     let budget = a.budget.unwrap_or_default();
     let specs = a.max_error.concat();
+    if a.plot.is_some() && (a.rig.is_some() || super::markers::is_marker_file(&a.input)) {
+        return Err(
+            "--plot draws the repeated-motion analysis of a motion clip (--codec rma), \
+                    not of a servo or marker clip"
+                .into(),
+        );
+    }
     if super::markers::is_marker_file(&a.input) {
         encode_markers(&a, &specs)?;
         return match chip {
@@ -213,6 +226,14 @@ pub fn run(a: Args) -> super::Result {
         CodecChoice::Index
     };
     let codec = a.codec.map_or(default, Into::into);
+    if a.plot.is_some() && !matches!(codec, CodecChoice::Rma | CodecChoice::Auto) {
+        return Err(format!(
+            "--plot draws the repeated-motion analysis of --codec rma (or auto), not {}; \
+             mocap eval --plot draws any clip's per-frame error",
+            codec.name()
+        )
+        .into());
+    }
     eprintln!(
         "{}: {} frames × {} channels at {:.1} Hz, units {unit}; encoding ({codec:?}, bound {bound})…",
         a.input.display(),
@@ -244,7 +265,7 @@ pub fn run(a: Args) -> super::Result {
     let file_bytes = std::fs::metadata(&a.input).map(|m| m.len()).unwrap_or(0);
     let x = &enc.metrics;
     println!(
-        "{}: {} bytes, ratio {:.2}:1 vs f32 ({:.1}:1 vs file), angle max {:.3}°, rms {:.3}°, joint max {:.2} mm, ARMS {:.2} mm, d {:.2}% (bound {bound} holds; {})",
+        "{}: {} bytes, ratio {:.2}:1 vs f32 ({:.1}:1 vs file), angle max {:.3}°, rms {:.3}°, joint max {:.2} mm, ARMS {:.2} mm, d {:.2}%{} (bound {bound} holds; {})",
         a.output.display(),
         enc.bytes.len(),
         x.ratio_f32,
@@ -254,6 +275,14 @@ pub fn run(a: Args) -> super::Result {
         x.max_joint_err_mm,
         x.arms_mm,
         x.distortion_pct,
+        if x.foot_pairs > 0 {
+            format!(
+                ", foot slide {:.0} mm/s (source {:.0})",
+                x.foot_slide_mm_s, x.foot_slide_source_mm_s
+            )
+        } else {
+            String::new()
+        },
         match enc.codec {
             CodecChoice::Index => format!("index, key interval {}", enc.key_interval),
             CodecChoice::Predictive => format!("predictive, blocks of {} frames", enc.key_interval),
@@ -264,6 +293,40 @@ pub fn run(a: Args) -> super::Result {
         let p = emit_source(kind, &a.output, &enc.bytes)?;
         eprintln!("wrote {}", p.display());
     }
+    if let Some(p) = &a.plot {
+        plot_rma(p, &m, &enc, &a.input)?;
+    }
+    Ok(())
+}
+
+/// `--plot`: the analysis of `m` and the repeated clips `enc` kept.
+fn plot_rma(path: &Path, m: &Motion, enc: &encode::Encoded, input: &Path) -> super::Result {
+    use mocap_encoder::codec::rma;
+    let analysis = rma::analyse(m, &rma::Params::default());
+    let clip = mocap_decoder::Clip::parse(&enc.bytes).map_err(|e| format!("{e:?}"))?;
+    let kept = clip
+        .sections()
+        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)
+        .and_then(|s| rma::section::inspect(s.bytes))
+        .map(|info| info.clips)
+        .unwrap_or_default();
+    let name = input.file_name().unwrap_or_default().to_string_lossy();
+    mocap_report::plot::rma::self_distance_plot(path, &analysis, Some(&kept), &name)?;
+    let [p, r, u] = analysis.frames_by_kind();
+    let kept_frames: u32 = kept.iter().map(|c| c.last - c.start + 1).sum();
+    eprintln!(
+        "wrote {}: the analysis's clips {p} primary, {r} repeated, {u} unique frames; {}",
+        path.display(),
+        if enc.codec == CodecChoice::Rma {
+            format!(
+                "the clip keeps {} repeated clip{} over {kept_frames} frames",
+                kept.len(),
+                if kept.len() == 1 { "" } else { "s" }
+            )
+        } else {
+            format!("auto chose {}: no repeated clip kept", enc.codec.name())
+        }
+    );
     Ok(())
 }
 

@@ -3,7 +3,11 @@
 //! alike), the similar-posture paths found in it (upper half, and mirrored
 //! in the lower half), and under it the clips on the time axis — each
 //! primary clip in its colour, its repeated clips in the same colour,
-//! lighter, unique clips grey.
+//! lighter, unique clips grey. Given the clip the encoder wrote, it also
+//! draws what was kept: each repeated clip's `Ref(t)` as a red line on the
+//! plot, and a last strip with the repeated clips and the frames they
+//! refer to (the encoder keeps a repetition only where it pays, and may
+//! read the paths as long matches rather than the paper's clips).
 
 use std::path::Path;
 
@@ -12,21 +16,34 @@ use plotters::prelude::*;
 
 use super::style::PALETTE;
 use super::{with_backend, PlotError};
+use mocap_encoder::codec::rma::section::Repeated;
 use mocap_encoder::codec::rma::{Analysis, ClipKind};
 
 /// Pixels of the plot's side (the analysis frames are sampled down to it).
 const SIDE: u32 = 600;
 
 /// Draws `a` (of a take called `name`) into `path` (PNG, or SVG by the
-/// extension).
-pub fn self_distance_plot(path: &Path, a: &Analysis, name: &str) -> Result<(), PlotError> {
-    let size = (SIDE + 40, SIDE + 150);
-    with_backend(path, size, |r| draw(r, a, name), |r| draw(r, a, name))
+/// extension), with `kept`, the repeated clips of the encoded clip (none:
+/// the analysis alone).
+pub fn self_distance_plot(
+    path: &Path,
+    a: &Analysis,
+    kept: Option<&[Repeated]>,
+    name: &str,
+) -> Result<(), PlotError> {
+    let size = (SIDE + 40, SIDE + if kept.is_some() { 230 } else { 150 });
+    with_backend(
+        path,
+        size,
+        |r| draw(r, a, kept, name),
+        |r| draw(r, a, kept, name),
+    )
 }
 
 fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     a: &Analysis,
+    kept: Option<&[Repeated]>,
     name: &str,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
@@ -132,10 +149,13 @@ fn draw<DB: DrawingBackend>(
         }
     }
     root.draw(&Text::new(
-        "clips: P primary (its colour), R repeated (its primary's colour, lighter), grey unique",
+        "analysis: P primary (its colour), R repeated (its primary's colour, lighter), grey unique",
         (x0, strip + 52),
         ("sans-serif", 13),
     ))?;
+    if let Some(kept) = kept {
+        draw_kept(&root, kept, (x0, y0), n, f.step.max(1), frames, strip + 80)?;
+    }
     root.present()?;
     Ok(())
 }
@@ -143,6 +163,68 @@ fn draw<DB: DrawingBackend>(
 fn lighten(c: RGBColor) -> RGBColor {
     let l = |v: u8| (u16::from(v) + (255 - u16::from(v)) / 2) as u8;
     RGBColor(l(c.0), l(c.1), l(c.2))
+}
+
+/// The encoded clip's repeated clips: `Ref(t)` on the plot (analysis
+/// frames: source frames / `step`, `n` of them) and a strip at `strip` on
+/// the time axis of `frames` source frames.
+fn draw_kept<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    kept: &[Repeated],
+    (x0, y0): (i32, i32),
+    n: usize,
+    step: usize,
+    frames: usize,
+    strip: i32,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let red = RGBColor(220, 30, 30);
+    let to_px = |source: f64| (source / step as f64 * SIDE as f64 / n as f64) as i32;
+    let tx = |t: f64| x0 + (t * SIDE as f64 / frames as f64) as i32;
+    for (i, c) in kept.iter().enumerate() {
+        let along: Vec<(f64, f64)> = (0..=c.last - c.start)
+            .step_by(step)
+            .chain(std::iter::once(c.last - c.start))
+            .map(|t| (f64::from(c.start + t), c.reference_at(t)))
+            .collect();
+        let upper = along.iter().map(|&(f, r)| (x0 + to_px(f), y0 + to_px(r)));
+        let lower = along.iter().map(|&(f, r)| (x0 + to_px(r), y0 + to_px(f)));
+        root.draw(&PathElement::new(
+            upper.collect::<Vec<_>>(),
+            red.stroke_width(3),
+        ))?;
+        root.draw(&PathElement::new(
+            lower.collect::<Vec<_>>(),
+            red.stroke_width(3),
+        ))?;
+        let colour = PALETTE[i % PALETTE.len()];
+        let (lo, hi) = along
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, r)| {
+                (lo.min(r), hi.max(r))
+            });
+        let span = |a: f64, b: f64, fill: RGBColor| {
+            Rectangle::new(
+                [(tx(a), strip), (tx(b + 1.0).max(tx(a) + 1), strip + 40)],
+                fill.filled(),
+            )
+        };
+        root.draw(&span(lo, hi, lighten(colour)))?;
+        root.draw(&span(f64::from(c.start), f64::from(c.last), colour))?;
+    }
+    root.draw(&Rectangle::new(
+        [(x0, strip), (x0 + SIDE as i32, strip + 40)],
+        BLACK.stroke_width(1),
+    ))?;
+    root.draw(&Text::new(
+        format!(
+            "kept in the clip: {} repeated clip{} (red on the plot: Ref(t)); each in its colour, lighter where it refers",
+            kept.len(),
+            if kept.len() == 1 { "" } else { "s" }
+        ),
+        (x0, strip + 52),
+        ("sans-serif", 13),
+    ))?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -158,14 +240,14 @@ mod tests {
         let a = rma::analyse(&m, &Params::default());
         let dir = std::env::temp_dir().join(format!("mocap-rma-plot-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        for name in ["demo.png", "demo.svg"] {
+        for (name, kept) in [("demo.png", None), ("demo.svg", Some(&[][..]))] {
             let path = dir.join(name);
-            self_distance_plot(&path, &a, "demo").unwrap();
+            self_distance_plot(&path, &a, kept, "demo").unwrap();
             assert!(std::fs::metadata(&path).unwrap().len() > 1000, "{name}");
         }
         std::fs::remove_dir_all(&dir).unwrap();
         let bad = Path::new("/nonexistent-mocap-dir/rma.png");
-        let e = self_distance_plot(bad, &a, "demo").unwrap_err();
+        let e = self_distance_plot(bad, &a, None, "demo").unwrap_err();
         assert_eq!(e.path(), bad);
     }
 }

@@ -215,6 +215,9 @@ pub struct SectionInfo {
     pub knots: usize,
     /// Bytes before the body (the channel runs and the clip records).
     pub plan_bytes: usize,
+    /// The repeated clips as written (`primary` is where their references
+    /// reach: the lowest and highest whole frame of `Ref`).
+    pub clips: Vec<Repeated>,
     /// The body.
     pub body: crate::codec::pca_spline::SectionInfo,
 }
@@ -245,14 +248,30 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
         info.added += r.varint()? as usize;
     }
     info.repeated = r.varint()? as usize;
+    let mut base = 0u32;
     for _ in 0..info.repeated {
-        r.varint()?;
-        info.repeated_frames += r.varint()? as usize + 1;
+        let start = base.checked_add(r.varint()?)?;
+        let last = start.checked_add(r.varint()?)?;
+        info.repeated_frames += (last - start) as usize + 1;
         let m = r.varint()? as usize;
         info.knots += m;
-        for _ in 0..2 * m {
-            r.varint()?;
+        let (mut t, mut v) = (0u32, (start as i32).wrapping_shl(REF_FRAC_BITS));
+        let mut knots = Vec::with_capacity(m.min(1 << 16));
+        for _ in 0..m {
+            t = t.checked_add(r.varint()?)?;
+            v = v.wrapping_add(mocap_decoder::wire::zigzag_decode(r.varint()?));
+            knots.push((t, v));
         }
+        let whole = |v: i32| (v >> REF_FRAC_BITS).max(0) as u32;
+        let lo = knots.iter().map(|k| whole(k.1)).min().unwrap_or(0);
+        let hi = knots.iter().map(|k| whole(k.1)).max().unwrap_or(0);
+        info.clips.push(Repeated {
+            start,
+            last,
+            knots,
+            primary: (lo, hi),
+        });
+        base = last + 1;
     }
     info.plan_bytes = r.pos();
     info.body = crate::codec::pca_spline::inspect(section.get(r.pos()..)?)?;
