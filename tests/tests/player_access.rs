@@ -359,3 +359,63 @@ fn pca_spline_cache_size_does_not_change_output() {
         }
     }
 }
+
+/// `rma` with few repeated frames (the demo, then its first 120 frames
+/// again: 20 % repeated): a player without room for the scratch pose beside
+/// the body's whole cache lays the scratch over that cache (SPEC §12.3);
+/// whatever the player's size, frames in order, in any order and samples
+/// between frames are the large player's, which keeps them apart.
+#[test]
+fn rma_scratch_over_the_cache_plays_the_same() {
+    let mut m = generate::animatronic_demo();
+    let c = m.channels();
+    let head = m.values[..120 * c].to_vec();
+    m.values.extend_from_slice(&head);
+    let bytes = clip_of(&m, CodecChoice::Rma, "20mm", None);
+    let clip = Clip::parse(&bytes).unwrap();
+    let section = clip
+        .sections()
+        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)
+        .expect("an rma section");
+    let info = mocap_encoder::codec::rma::section::inspect(section.bytes).unwrap();
+    let frames = clip.header().frame_count();
+    assert!(info.repeated >= 1, "the replay is a repeated clip");
+    assert!(info.repeated_frames * 4 <= frames as usize, "{info:?}");
+    let all = clipfile::decode_all(&clip).unwrap();
+    let period = u64::from(clip.header().frame_time_ns());
+    // Times: every frame, then between frames, then random.
+    let times: Vec<u64> = (0..u64::from(frames))
+        .map(|f| f * period / 1000)
+        .chain((0..u64::from(frames)).map(|f| (f * period + period / 3) / 1000))
+        .chain(
+            (0..2000u64).map(|i| (i * 7919 * period / 1000) % (u64::from(frames) * period / 1000)),
+        )
+        .collect();
+    let mut big = Player::<4096>::new(&clip).unwrap();
+    let mut want = vec![[0i32; 64]; times.len()];
+    for (w, &t) in want.iter_mut().zip(&times) {
+        big.sample_at(t, w).unwrap();
+    }
+    fn check<const N: usize>(clip: &Clip, all: &[i32], times: &[u64], want: &[[i32; 64]]) {
+        let n = clip.header().channel_count();
+        let mut p = Player::<N>::new(clip).unwrap();
+        let mut out = [0i32; 64];
+        for f in 0..clip.header().frame_count() {
+            p.frame(f, &mut out).unwrap();
+            assert_eq!(
+                &out[..n],
+                &all[f as usize * n..][..n],
+                "frame {f}, Player<{N}>"
+            );
+        }
+        for (w, &t) in want.iter().zip(times) {
+            p.sample_at(t, &mut out).unwrap();
+            assert_eq!(&out[..n], &w[..n], "sample at {t} µs, Player<{N}>");
+        }
+    }
+    check::<{ 2 + 42 }>(&clip, &all, &times, &want);
+    check::<{ 2 + 42 + 40 }>(&clip, &all, &times, &want);
+    check::<{ 2 + 42 + 150 }>(&clip, &all, &times, &want);
+    check::<300>(&clip, &all, &times, &want);
+    check::<400>(&clip, &all, &times, &want);
+}

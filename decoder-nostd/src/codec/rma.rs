@@ -45,6 +45,11 @@ pub(crate) struct RmaCodec<'a> {
     /// Words of the body's cache that hold every group of its largest
     /// segment: what the body at `t` gets first of the player's words.
     t_cache: usize,
+    /// At most a quarter of the frames are in repeated clips: a player
+    /// without room for the scratch pose beside `t`'s whole cache lays the
+    /// scratch over that cache (refilled after each repeated pose) rather
+    /// than shrink it for every pose.
+    few_repeats: bool,
 }
 
 /// One repeated clip: its first and last frame and its knots, still coded.
@@ -112,12 +117,15 @@ impl<'a> RmaCodec<'a> {
         let clips_at = r.pos();
         let rest = bytes.get(clips_at..).unwrap_or(&[]);
         let (mut at, mut base) = (0usize, 0u32);
+        let mut repeated = 0u64;
         for _ in 0..clip_count {
             let c = record_at(rest, at, base).ok_or(truncated)?;
             if c.last >= frames {
                 return Err(malformed("repeated clip past the last frame"));
             }
             check_knots(&c)?;
+            repeated =
+                repeated.wrapping_add(u64::from(c.last.wrapping_sub(c.start)).wrapping_add(1));
             at = c.next;
             base = c.last.wrapping_add(1);
         }
@@ -132,6 +140,7 @@ impl<'a> RmaCodec<'a> {
             clips,
             body,
             t_cache,
+            few_repeats: repeated.wrapping_mul(4) <= u64::from(frames),
         })
     }
 
@@ -192,13 +201,18 @@ impl<'a> RmaCodec<'a> {
     }
 
     /// Decodes the pose at `pos` (frames, 16.16; at most the last frame)
-    /// into `out`. `state` holds the clip cursor, then a scratch pose of
-    /// `C` words, then the body's key-interval caches: for `t` as many
-    /// words as cache its largest segment whole, the rest for `Ref(t)`
-    /// (all for `t` in a section without repeated clips); `segment` and `reference` are the body's segment
-    /// cursors for `t` and `Ref(t)`. `None` only if an invariant of the
-    /// validated section is broken or `state` is shorter than
-    /// [`RmaCodec::state_words`].
+    /// into `out`. `state` holds the clip cursor, then the words of a
+    /// scratch pose of `C` words and of the body's key-interval caches:
+    /// with room for both, the scratch first, then for `t` as many words as
+    /// cache its largest segment whole, the rest for `Ref(t)`; without, in
+    /// a section with few repeated frames, `t`'s cache first with the
+    /// scratch laid over its start (the cache is marked stale after a pose
+    /// that wrote the scratch), then `Ref(t)`'s; in a section without
+    /// repeated clips, every word for `t`. `segment` and `reference` are
+    /// the body's segment cursors for `t` and `Ref(t)`. `None` only if an
+    /// invariant of the validated section is broken or `state` is shorter
+    /// than [`RmaCodec::state_words`]. The words' use never changes a
+    /// decoded value.
     ///
     /// A clip weighs 1 on its frames and fades linearly over the frame
     /// before its start and the frame after its last (§12.3), so between
@@ -214,41 +228,67 @@ impl<'a> RmaCodec<'a> {
     ) -> Option<()> {
         let frame = u32::try_from(pos >> FRAC_BITS).ok()?;
         let frac = (pos & ((1 << FRAC_BITS) - 1)) as i64;
-        let (cursor, rest) = state.split_at_mut_checked(CURSOR_WORDS)?;
-        let (scratch, caches) = rest.split_at_mut_checked(self.channels)?;
-        // The body at `t` (every pose) is cached whole first; the body at
-        // `Ref(t)` (repeated poses only) gets what is left.
-        let half = if self.clips.is_empty() {
-            caches.len()
-        } else {
-            self.t_cache.min(caches.len())
-        };
-        let (cache_t, cache_ref) = caches.split_at_mut(half);
-        let near = self.clips_near(frame, cursor)?;
-        self.body.decode_at(pos, segment, out, cache_t)?;
-        let one = 1i64 << FRAC_BITS;
-        let mut add = |c: &RepeatedClip<'a>, weight: i64| -> Option<()> {
-            let at = ref_position(c, pos, self.frames)?;
-            self.body.decode_at(at, reference, scratch, cache_ref)?;
-            self.add_runs(scratch, weight, out)
-        };
-        if let Some(c) = &near.here {
-            add(
-                c,
-                if frame < c.last {
-                    one
-                } else {
-                    one.wrapping_sub(frac)
-                },
-            )?;
+        let (cursor, words) = state.split_at_mut_checked(CURSOR_WORDS)?;
+        if self.clips.is_empty() {
+            return self.body.decode_at(pos, segment, out, words);
         }
-        if let Some(c) = near
+        let near = self.clips_near(frame, cursor)?;
+        let one = 1i64 << FRAC_BITS;
+        let here = near.here.map(|c| {
+            let w = if frame < c.last {
+                one
+            } else {
+                one.wrapping_sub(frac)
+            };
+            (c, w)
+        });
+        let after = near
             .after
             .filter(|c| frac > 0 && c.start == frame.wrapping_add(1))
-        {
-            add(&c, frac)?;
+            .map(|c| (c, frac));
+        let c = self.channels;
+        if !self.few_repeats || words.len() >= c.wrapping_add(self.t_cache) {
+            // The scratch beside both caches.
+            let (scratch, caches) = words.split_at_mut_checked(c)?;
+            let (cache_t, cache_ref) = caches.split_at_mut(self.t_cache.min(caches.len()));
+            self.body.decode_at(pos, segment, out, cache_t)?;
+            for (clip, weight) in here.into_iter().chain(after) {
+                self.add_clip(&clip, weight, pos, reference, scratch, cache_ref, out)?;
+            }
+            return Some(());
         }
+        // The scratch over the start of `t`'s cache.
+        let half = self.t_cache.min(words.len());
+        self.body
+            .decode_at(pos, segment, out, words.get_mut(..half)?)?;
+        if here.is_none() && after.is_none() {
+            return Some(());
+        }
+        let (scratch, tail) = words.split_at_mut_checked(c)?;
+        let cache_ref = tail.get_mut(half.saturating_sub(c)..).unwrap_or(&mut []);
+        for (clip, weight) in here.into_iter().chain(after) {
+            self.add_clip(&clip, weight, pos, reference, scratch, cache_ref, out)?;
+        }
+        PcaSplineCodec::forget(words);
         Some(())
+    }
+
+    /// Adds clip `c`'s primary at `Ref(pos)`, weighted (§12.3 step 3),
+    /// evaluated into `scratch` through `cache`.
+    #[allow(clippy::too_many_arguments)] // the pose, its two buffers and the body's cursor
+    fn add_clip(
+        &self,
+        c: &RepeatedClip<'a>,
+        weight: i64,
+        pos: u64,
+        reference: &mut Cursor<'a>,
+        scratch: &mut [i32],
+        cache: &mut [i32],
+        out: &mut [i32],
+    ) -> Option<()> {
+        let at = ref_position(c, pos, self.frames)?;
+        self.body.decode_at(at, reference, scratch, cache)?;
+        self.add_runs(scratch, weight, out)
     }
 
     /// `out += (scratch · weight) >> 16` on the added channels (exactly

@@ -519,6 +519,14 @@ impl<'a> PcaSplineCodec<'a> {
         most
     }
 
+    /// Marks a cache as holding nothing (its words were used for something
+    /// else): the next pose through it fills it again.
+    pub(crate) fn forget(cache: &mut [i32]) {
+        if let Some(owner) = cache.first_mut() {
+            *owner = 0;
+        }
+    }
+
     /// Fills the cache head and as many group slots as fit for `seg`, each
     /// group's key interval the one holding `rel`.
     pub(super) fn prepare(
