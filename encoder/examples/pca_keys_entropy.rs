@@ -145,6 +145,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for f in input::expand(&paths)? {
         let read = input::read_motion(&f, None)?;
         let opts = EncodeOptions {
+            key_bits: None,
             codec: CodecChoice::PcaSpline,
             bound: Bound::from_specs(&specs),
             metres_per_unit: read.unit_or_detect().metres(),

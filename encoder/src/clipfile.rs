@@ -227,6 +227,7 @@ mod tests {
         let m = generate::animatronic_demo();
         let metres = units::detect(&m).metres();
         let opts = EncodeOptions {
+            key_bits: None,
             codec: CodecChoice::Index,
             bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
             metres_per_unit: metres,

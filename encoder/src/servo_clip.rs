@@ -451,6 +451,7 @@ pub fn encode_servo_clip(
         let enc = encode::encode(
             &motion,
             &EncodeOptions {
+                key_bits: None,
                 codec: opts.codec,
                 bound,
                 metres_per_unit: 1e-3,

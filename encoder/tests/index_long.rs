@@ -32,6 +32,7 @@ fn motion(frames: usize, value: impl Fn(usize, usize) -> f64) -> Motion {
 
 fn options(key_interval: Option<u16>) -> EncodeOptions {
     EncodeOptions {
+        key_bits: None,
         codec: CodecChoice::Index,
         bound: Bound {
             angle_deg: Some(1.0),

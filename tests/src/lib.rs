@@ -311,6 +311,7 @@ pub fn servo_demo_clip_for(
 pub fn encode_index_1deg(m: &mocap_encoder::motion::Motion) -> Vec<u8> {
     use mocap_encoder::encode::{self, Bound, BoundSpec, CodecChoice, EncodeOptions};
     let opts = EncodeOptions {
+        key_bits: None,
         codec: CodecChoice::Index,
         bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: mocap_encoder::units::detect(m).metres(),

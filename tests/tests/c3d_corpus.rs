@@ -59,6 +59,7 @@ fn c3d_corpus_roundtrip() {
             // (no rotation channel: the CLI refuses it with a message).
             for (mm, arms) in [(5.0, None), (20.0, None), (50.0, Some(10.0))] {
                 let opts = EncodeOptions {
+                    key_bits: None,
                     codec,
                     bound: Bound {
                         angle_deg: None,

@@ -70,6 +70,7 @@ fn roundtrip_file(file: &Path, codec: CodecChoice, bound: &str) -> (usize, usize
     let m = &read.motion;
     let unit = read.unit_or_detect();
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: b,
         metres_per_unit: unit.metres(),
@@ -243,6 +244,7 @@ fn auto_picks_the_smaller_codec() {
     let bound = Bound::from_specs(&["50mm".parse().unwrap()]);
     let size = |codec| {
         let opts = EncodeOptions {
+            key_bits: None,
             codec,
             bound,
             metres_per_unit: units::detect(&m).metres(),
@@ -274,6 +276,7 @@ fn index_35_01_reaches_ratio_6_at_1deg() {
     };
     let m = bvh::read_file(f).unwrap();
     let opts = EncodeOptions {
+        key_bits: None,
         codec: CodecChoice::Index,
         bound: Bound::from_specs(&["1deg".parse().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),

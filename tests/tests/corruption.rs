@@ -42,6 +42,7 @@ fn encode_with(
     key_interval: Option<u16>,
 ) -> Vec<u8> {
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),

@@ -25,6 +25,7 @@ fn firmware_default_clip_is_current() {
     let shipped = std::fs::read(workspace_root().join("firmware-example/clips/demo.mcb")).unwrap();
     let m = bvh::read_file(&workspace_root().join("assets/animatronic_demo.bvh")).unwrap();
     let opts = EncodeOptions {
+        key_bits: None,
         codec: CodecChoice::Index,
         bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),

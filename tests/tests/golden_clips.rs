@@ -48,6 +48,7 @@ fn motion_clip_layout(
     index_layout: mocap_encoder::codec::index::IndexLayout,
 ) -> Vec<u8> {
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: bound(specs),
         metres_per_unit: units::detect(m).metres(),
@@ -388,6 +389,7 @@ fn earlier_pattern_layouts_keep_decoding() {
 fn pattern_columns_layout_is_the_committed_layout_1_clip() {
     let m = demo();
     let opts = EncodeOptions {
+        key_bits: None,
         codec: CodecChoice::Pattern,
         bound: bound(&["20mm"]),
         metres_per_unit: units::detect(&m).metres(),

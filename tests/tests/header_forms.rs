@@ -12,6 +12,7 @@ fn compact_and_full_headers_agree() {
     let m = generate::animatronic_demo();
     let mpu = units::detect(&m).metres();
     let opts = EncodeOptions {
+        key_bits: None,
         codec: CodecChoice::PcaSpline,
         bound: Bound::from_specs(&["1deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: mpu,

@@ -13,6 +13,7 @@ use mocap_tests::corpus_file;
 fn options(codec: CodecChoice, bound: &str, m: &Motion) -> (EncodeOptions, Vec<BoundSpec>) {
     let specs: Vec<BoundSpec> = bound.split('+').map(|s| s.parse().unwrap()).collect();
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound::from_specs(&specs),
         metres_per_unit: units::detect(m).metres(),

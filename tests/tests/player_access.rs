@@ -18,6 +18,7 @@ fn clip_of(
     key_interval: Option<u16>,
 ) -> Vec<u8> {
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),
@@ -207,6 +208,7 @@ fn predictive_player_needs_its_state() {
 fn pca_clip() -> Vec<u8> {
     let m = generate::animatronic_demo();
     let opts = EncodeOptions {
+        key_bits: None,
         codec: CodecChoice::PcaSpline,
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),
@@ -299,6 +301,7 @@ fn pca_spline_cache_size_does_not_change_output() {
         let path = files.iter().find(|p| p.ends_with("05_04.bvh")).unwrap();
         let m = mocap_encoder::bvh::read_file(path).unwrap();
         let opts = EncodeOptions {
+            key_bits: None,
             codec: CodecChoice::PcaSpline,
             bound: Bound::from_specs(&[
                 "50mm".parse::<BoundSpec>().unwrap(),

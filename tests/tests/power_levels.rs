@@ -14,6 +14,7 @@ use mocap_encoder::{generate, units};
 fn demo_clip(codec: CodecChoice, key_interval: Option<u16>) -> Vec<u8> {
     let m = generate::animatronic_demo();
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(&m).metres(),

@@ -39,6 +39,7 @@ fn encode_with(
     bound: &str,
 ) -> Vec<u8> {
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound::from_specs(
             &bound

@@ -40,6 +40,7 @@ fn encode_to(
     index_layout: IndexLayout,
 ) -> Vec<u8> {
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound::from_specs(&[bound.parse::<BoundSpec>().unwrap()]),
         metres_per_unit: units::detect(m).metres(),

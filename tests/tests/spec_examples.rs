@@ -379,6 +379,7 @@ fn fast_layout_round_trip() {
             mocap_encoder::encode::encode(
                 &motion,
                 &mocap_encoder::encode::EncodeOptions {
+                    key_bits: None,
                     codec: mocap_encoder::encode::CodecChoice::Index,
                     bound: mocap_encoder::encode::Bound::from_specs(&[
                         mocap_encoder::encode::BoundSpec::Degrees(1.0),
@@ -448,6 +449,7 @@ fn two_channel_clip() -> Vec<u8> {
     mocap_encoder::encode::encode(
         &motion,
         &mocap_encoder::encode::EncodeOptions {
+            key_bits: None,
             codec: mocap_encoder::encode::CodecChoice::Index,
             bound: mocap_encoder::encode::Bound {
                 angle_deg: Some(0.5),
@@ -649,6 +651,7 @@ fn example_input(
         values,
     };
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound {
             angle_deg: Some(1.0),
@@ -853,6 +856,7 @@ fn missing_samples_example() {
         unit: mocap_encoder::units::LengthUnit::Mm,
     };
     let opts = mocap_encoder::encode::EncodeOptions {
+        key_bits: None,
         codec: mocap_encoder::encode::CodecChoice::Index,
         bound: mocap_encoder::encode::Bound {
             angle_deg: None,

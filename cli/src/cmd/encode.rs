@@ -242,6 +242,7 @@ pub fn run(a: Args) -> super::Result {
         1.0 / m.frame_time
     );
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound,
         metres_per_unit: unit.metres(),

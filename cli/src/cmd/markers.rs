@@ -77,6 +77,7 @@ pub fn encode(
     let (clip, unit) = read(input, units)?;
     eprintln!("encoding ({codec:?}, bound {bound}; missing samples filled for coding, flagged in the clip)…");
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound,
         metres_per_unit: unit.metres(),

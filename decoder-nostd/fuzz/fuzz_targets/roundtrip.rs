@@ -108,6 +108,7 @@ fuzz_target!(|input: Input| {
     ][usize::from(input.codec % 5)];
     let bound_deg = 0.05 + f64::from(input.bound_cdeg % 996) / 100.0;
     let opts = EncodeOptions {
+        key_bits: None,
         codec,
         bound: Bound::from_specs(&[BoundSpec::Degrees(bound_deg)]),
         metres_per_unit: METRES_PER_UNIT,

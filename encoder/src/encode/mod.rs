@@ -39,6 +39,15 @@ pub struct EncodeOptions {
     /// The `pattern` codec's settings: its body-part nodes (empty: the
     /// skeleton's limbs, [`crate::codec::pattern::nodes`]) and its layout.
     pub pattern: crate::codec::pattern::PatternOptions,
+    /// Uniform key quantisation for `pca-spline` and `rma`, the paper's
+    /// Table 4 baseline (Lin et al.: 9 bits for primary clips, 7 for
+    /// repeated ones): `(own, residual)` bits, every spline component's keys
+    /// in a segment at the finest power-of-two step that spans their range
+    /// in that many bits (`own` for `pca-spline` and `rma`'s own stretches,
+    /// `residual` for `rma`'s repeated clips). `None`, the default: the
+    /// range-aware adaptive quantisation, each component's step from the
+    /// tolerance and its width from its range.
+    pub key_bits: Option<(u8, u8)>,
 }
 
 /// An encoded clip and its measured quality.

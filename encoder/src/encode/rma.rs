@@ -162,10 +162,20 @@ struct Made {
 }
 
 impl Job<'_> {
+    /// The body's parameters at `τ` for the own stretches.
     fn params(&self, tau: f64) -> pca_spline::Params {
         pca_spline::Params {
             fixed_groups: true,
+            key_bits: self.opts.key_bits.map(|b| b.0),
             ..pca_spline::Params::new(tau, self.fps)
+        }
+    }
+
+    /// … and for the repeated clips' residuals.
+    fn residual_params(&self, tau: f64) -> pca_spline::Params {
+        pca_spline::Params {
+            key_bits: self.opts.key_bits.map(|b| b.1),
+            ..self.params(tau)
         }
     }
 
@@ -355,6 +365,7 @@ impl Job<'_> {
         // 2. The residuals of the repeated clips against their primaries'
         // source values at Ref(t), on the added channels (elsewhere the
         // body is the value itself).
+        let residual_params = self.residual_params(tau);
         let mut residual = values.clone();
         for &c in &plan.added {
             for r in &plan.repeated {
@@ -370,7 +381,12 @@ impl Job<'_> {
             .par_iter()
             .map(|r| {
                 let span = (r.start as usize, r.last as usize);
-                self.stretch(&residual, span, &params, &pca_spline::Cache::default())
+                self.stretch(
+                    &residual,
+                    span,
+                    &residual_params,
+                    &pca_spline::Cache::default(),
+                )
             })
             .collect::<Result<_, _>>()?;
         let own_now: Vec<SegmentModel> = model

@@ -174,7 +174,10 @@ pub(super) fn encode_pca(
     let fps = 1.0 / m.frame_time;
     let cache = pca_spline::Cache::default();
     let run = |tau: f64| -> Result<Attempt, EncodeError> {
-        let params = pca_spline::Params::new(tau, fps);
+        let params = pca_spline::Params {
+            key_bits: opts.key_bits.map(|b| b.0),
+            ..pca_spline::Params::new(tau, fps)
+        };
         let mut model =
             pca_spline::model_with(&input, &params, &cache, &|d, t| progress.work(d, t))?;
         let try_model = |model: &pca_spline::Model| {
@@ -401,6 +404,7 @@ mod tests {
             CodecChoice::Rma,
         ] {
             let opts = EncodeOptions {
+                key_bits: None,
                 codec,
                 bound,
                 metres_per_unit: crate::units::detect(&m).metres(),

@@ -302,6 +302,7 @@ pub fn build_with<'a>(
         let metres: Vec<f64> = group.iter().map(|&i| patterns[i].2).collect();
         let p = progress(k0, spec.clips.len(), &c0.name);
         let opts = EncodeOptions {
+            key_bits: None,
             codec: CodecChoice::Pattern,
             bound: c0.bound,
             metres_per_unit: metres[0],
@@ -464,6 +465,7 @@ fn encode_one(
     let enc = encode::encode_with(
         m,
         &EncodeOptions {
+            key_bits: None,
             codec: c.codec,
             bound: c.bound,
             metres_per_unit: unit.metres(),

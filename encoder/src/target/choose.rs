@@ -107,6 +107,7 @@ mod tests {
             .chain([(CodecChoice::Index, IndexLayout::Fast)])
             .map(|(codec, index_layout)| {
                 let opts = EncodeOptions {
+                    key_bits: None,
                     codec,
                     bound: Bound::from_specs(&[BoundSpec::Degrees(1.0)]),
                     metres_per_unit: crate::units::detect(&m).metres(),

@@ -206,6 +206,7 @@ impl Source {
         progress: &dyn encode::Progress,
     ) -> Result<(Encoded, f64), BenchError> {
         let opts = EncodeOptions {
+            key_bits: None,
             codec,
             bound: *bound,
             metres_per_unit: self.metres_per_unit,

@@ -60,6 +60,11 @@ pub struct Params {
     /// (the `rma` codec models stretches of one clip separately, under the
     /// clip's one group table).
     pub fixed_groups: bool,
+    /// Uniform key quantisation (the Table 4 baseline of Lin et al.):
+    /// every component's keys in a segment at the finest power-of-two step
+    /// that spans their range in this many bits. `None`: the step from
+    /// `quant_share · τ`, the width from the range (range-aware, adaptive).
+    pub key_bits: Option<u8>,
 }
 
 /// Longest segment the encoder makes, in seconds (the format allows 32 768
@@ -82,6 +87,7 @@ impl Params {
             pca_share: 0.6,
             key_share: 0.75,
             quant_share: 0.1,
+            key_bits: None,
             max_components: usize::from(MAX_COMPONENTS),
             ppca: Some(Ppca::paper(fps)),
             blend: ((10.0 * fps / 120.0).round() as usize).max(1),
@@ -482,12 +488,20 @@ fn fit_group(
     let mut codes = vec![0u32; m * k];
     for j in 0..k {
         let gj = fit.gram[j * k + j].sqrt().max(1e-300);
-        let step = p.quant_share * p.tolerance * 12f64.sqrt() / (gj * (k as f64).sqrt());
-        let s = step
-            .max(1.0)
-            .log2()
-            .floor()
-            .clamp(0.0, f64::from(MAX_VALUE_SHIFT)) as u8;
+        let s = match p.key_bits {
+            None => {
+                let step = p.quant_share * p.tolerance * 12f64.sqrt() / (gj * (k as f64).sqrt());
+                step.max(1.0).log2().floor()
+            }
+            Some(bits) => {
+                let v = (0..m).map(|r| controls[r * k + j]);
+                let range = v.clone().fold(f64::MIN, f64::max) - v.fold(f64::MAX, f64::min);
+                let levels = f64::from((1u32 << bits.min(30)) - 1).max(1.0);
+                // The finest power of two whose codes span the range in `bits`.
+                (range / levels).max(1.0).log2().ceil()
+            }
+        }
+        .clamp(0.0, f64::from(MAX_VALUE_SHIFT)) as u8;
         let unit = f64::from(1u32 << s);
         let col: Vec<i64> = (0..m)
             .map(|r| (controls[r * k + j] / unit).round() as i64)
@@ -592,5 +606,56 @@ mod tests {
         for j in 0..starts.len() - 2 {
             assert!(ends[j] + 2 <= starts[j + 2].0);
         }
+    }
+
+    /// Uniform key quantisation (`key_bits`, the Table 4 baseline): every
+    /// component's keys span their range in the bits given (one more at
+    /// most, from rounding to the step), whatever the tolerance; adaptive
+    /// keys follow the tolerance instead.
+    #[test]
+    fn uniform_keys_span_their_range_in_the_bits_given() {
+        let frames = 240;
+        let values: Vec<Vec<i32>> = (0..3)
+            .map(|c| {
+                (0..frames)
+                    .map(|f| {
+                        let t = f as f64 / 30.0 + c as f64;
+                        (20_000.0 * t.sin() + 7_000.0 * (2.3 * t).cos()) as i32
+                    })
+                    .collect()
+            })
+            .collect();
+        let input = Input {
+            values: &values,
+            weights: &[1.0; 3],
+            groups: &[vec![0, 1, 2]],
+        };
+        let widths = |key_bits: Option<u8>, tolerance: f64| -> Vec<u8> {
+            let p = Params {
+                key_bits,
+                ppca: None,
+                ..Params::new(tolerance, 120.0)
+            };
+            let m = model(&input, &p).unwrap();
+            m.segments
+                .iter()
+                .flat_map(|s| s.groups.iter().flat_map(|g| g.comps.iter().map(|c| c.0)))
+                .collect()
+        };
+        for bits in [5u8, 9] {
+            for tolerance in [2.0, 200.0] {
+                let w = widths(Some(bits), tolerance);
+                assert!(
+                    !w.is_empty() && w.iter().all(|&x| x <= bits + 1),
+                    "{bits}: {w:?}"
+                );
+                assert!(w.iter().any(|&x| x >= bits), "{bits}: {w:?}");
+            }
+        }
+        let (fine, coarse) = (widths(None, 2.0), widths(None, 200.0));
+        assert!(
+            fine.iter().sum::<u8>() > coarse.iter().sum::<u8>(),
+            "{fine:?} {coarse:?}"
+        );
     }
 }
