@@ -38,6 +38,7 @@ fn options(key_interval: Option<u16>) -> EncodeOptions {
             angle_deg: Some(1.0),
             position_mm: None,
             arms_mm: None,
+            foot_slide_mm_s: None,
         },
         metres_per_unit: 1.0,
         key_interval,

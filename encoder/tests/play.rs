@@ -139,6 +139,7 @@ fn servo_options(
             angle_deg: Some(bound_deg),
             position_mm: None,
             arms_mm: None,
+            foot_slide_mm_s: None,
         },
         key_interval: None,
         rate,

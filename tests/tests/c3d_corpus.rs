@@ -65,6 +65,7 @@ fn c3d_corpus_roundtrip() {
                         angle_deg: None,
                         position_mm: Some(mm),
                         arms_mm: arms,
+                        foot_slide_mm_s: None,
                     },
                     metres_per_unit: mpu,
                     key_interval: None,

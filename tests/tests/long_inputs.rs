@@ -41,6 +41,10 @@ fn within_bound(name: &str, m: &Motion, codec: CodecChoice, bound: &str) {
             BoundSpec::Degrees(d) => assert!(x.angle_max_deg <= d, "{name}: {x:?}"),
             BoundSpec::Millimetres(mm) => assert!(x.max_joint_err_mm <= mm, "{name}: {x:?}"),
             BoundSpec::Arms(mm) => assert!(x.arms_mm <= mm, "{name}: {x:?}"),
+            BoundSpec::Slide(v) => assert!(
+                x.foot_slide_mm_s - x.foot_slide_source_mm_s <= v,
+                "{name}: {x:?}"
+            ),
         }
     }
     eprintln!(

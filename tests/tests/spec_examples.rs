@@ -455,6 +455,7 @@ fn two_channel_clip() -> Vec<u8> {
                 angle_deg: Some(0.5),
                 position_mm: None,
                 arms_mm: None,
+                foot_slide_mm_s: None,
             },
             metres_per_unit: 1e-3,
             key_interval: None,
@@ -657,6 +658,7 @@ fn example_input(
             angle_deg: Some(1.0),
             position_mm: None,
             arms_mm: None,
+            foot_slide_mm_s: None,
         },
         // Lengths in cm: the header's source unit 10 000 000 nm.
         metres_per_unit: 0.01,
@@ -862,6 +864,7 @@ fn missing_samples_example() {
             angle_deg: None,
             position_mm: Some(1.0),
             arms_mm: None,
+            foot_slide_mm_s: None,
         },
         metres_per_unit: 1e-3,
         key_interval: None,

@@ -41,7 +41,9 @@ pub struct Args {
     codec: Option<CodecArg>,
     /// Error bound, repeatable: `1deg` (rotation channels), `8mm` (max
     /// joint position error by forward kinematics), `arms:10mm` (mean
-    /// RMS joint error); `+` joins several in one value. Default: `1deg`;
+    /// RMS joint error), `slide:20mm/s` (the decoded feet's slide where the
+    /// source's are planted, above the source's own; on top of the
+    /// others); `+` joins several in one value. Default: `1deg`;
     /// a C3D marker file takes lengths only (the marker position error),
     /// default `1mm`.
     #[arg(long = "max-error", value_parser = parse_bounds)]
@@ -200,6 +202,13 @@ pub fn run(a: Args) -> super::Result {
         Bound::from_specs(&specs)
     };
     if let Some(rig_path) = &a.rig {
+        if bound.foot_slide_mm_s.is_some() {
+            return Err(
+                "a servo clip's bound is in degrees of servo travel (e.g. 0.5deg); \
+                        slide: bounds the feet of a motion clip"
+                    .into(),
+            );
+        }
         let opts = servo_clip::ServoEncodeOptions {
             codec: a.codec.map_or(CodecChoice::Predictive, Into::into),
             bound,

@@ -58,6 +58,13 @@ pub fn bound(specs: &[BoundSpec]) -> super::Result<Bound> {
                 .into(),
         );
     }
+    if specs.iter().any(|s| matches!(s, BoundSpec::Slide(_))) {
+        return Err(
+            "a marker clip has no skeleton, so no feet to keep from sliding: \
+                    give its bound as a length (e.g. --max-error 5mm)"
+                .into(),
+        );
+    }
     if specs.is_empty() {
         return Ok(Bound::from_specs(&[BoundSpec::Millimetres(1.0)]));
     }

@@ -37,6 +37,9 @@ pub enum BoundError {
     /// `arms:` followed by an angle.
     #[error("error bound '{0}': ARMS is a length, e.g. arms:10mm")]
     ArmsNotLength(String),
+    /// `slide:` followed by something other than a speed.
+    #[error("error bound '{0}': the foot slide is a speed, e.g. slide:20mm/s")]
+    SlideNotSpeed(String),
 }
 
 /// One error bound: degrees on rotation channels or millimetres on joint
@@ -50,6 +53,11 @@ pub enum BoundSpec {
     /// Mean over frames of the RMS joint-position error (ARMS),
     /// millimetres: `arms:10mm`.
     Arms(f64),
+    /// Foot slide: the decoded feet's mean horizontal speed where the
+    /// source's are planted, at most this much above the source's own, mm/s
+    /// (`slide:20mm/s`; [`crate::contacts`]). On top of the other bounds
+    /// (alone, beside the default `1deg`).
+    Slide(f64),
 }
 
 impl FromStr for BoundSpec {
@@ -57,6 +65,17 @@ impl FromStr for BoundSpec {
 
     fn from_str(s: &str) -> Result<Self, BoundError> {
         let t = s.trim();
+        if let Some(rest) = t.strip_prefix("slide:") {
+            let not_speed = || BoundError::SlideNotSpeed(s.to_string());
+            let (length, scale) = [("mm/s", 1.0), ("cm/s", 10.0), ("m/s", 1000.0)]
+                .iter()
+                .find_map(|(unit, k)| rest.trim().strip_suffix(unit).map(|v| (v, *k)))
+                .ok_or_else(not_speed)?;
+            return match format!("{length}mm").parse::<BoundSpec>()? {
+                BoundSpec::Millimetres(v) => Ok(BoundSpec::Slide(v * scale)),
+                _ => Err(not_speed()),
+            };
+        }
         if let Some(rest) = t.strip_prefix("arms:") {
             return match rest.parse::<BoundSpec>()? {
                 BoundSpec::Millimetres(mm) => Ok(BoundSpec::Arms(mm)),
@@ -95,6 +114,8 @@ pub struct Bound {
     pub position_mm: Option<f64>,
     /// ARMS of joint positions, millimetres.
     pub arms_mm: Option<f64>,
+    /// Foot slide above the source's, mm/s ([`BoundSpec::Slide`]).
+    pub foot_slide_mm_s: Option<f64>,
 }
 
 impl Bound {
@@ -108,6 +129,7 @@ impl Bound {
             angle_deg: None,
             position_mm: None,
             arms_mm: None,
+            foot_slide_mm_s: None,
         };
         for s in specs {
             match *s {
@@ -116,7 +138,14 @@ impl Bound {
                     b.position_mm = Some(b.position_mm.map_or(m, |x| x.min(m)))
                 }
                 BoundSpec::Arms(m) => b.arms_mm = Some(b.arms_mm.map_or(m, |x| x.min(m))),
+                BoundSpec::Slide(v) => {
+                    b.foot_slide_mm_s = Some(b.foot_slide_mm_s.map_or(v, |x| x.min(v)))
+                }
             }
+        }
+        // A slide bound limits the feet only: the rest keeps the default.
+        if b.angle_deg.is_none() && !b.positional() && b.foot_slide_mm_s.is_some() {
+            b.angle_deg = Some(1.0);
         }
         b
     }
@@ -127,6 +156,9 @@ impl Bound {
             && self.position_mm.is_none_or(|p| m.max_joint_err_mm <= p)
             && self.arms_mm.is_none_or(|p| m.arms_mm <= p)
             && (self.positional() || m.position_max_mm <= Self::DEFAULT_TRANSLATION_MM)
+            && self.foot_slide_mm_s.is_none_or(|v| {
+                m.foot_pairs == 0 || m.foot_slide_mm_s - m.foot_slide_source_mm_s <= v
+            })
     }
 
     /// True if a bound is on joint positions (max or ARMS).
@@ -146,6 +178,9 @@ impl fmt::Display for Bound {
         }
         if let Some(p) = self.arms_mm {
             parts.push(format!("ARMS {p} mm"));
+        }
+        if let Some(v) = self.foot_slide_mm_s {
+            parts.push(format!("foot slide +{v} mm/s"));
         }
         if parts.is_empty() {
             f.write_str("none")
@@ -196,4 +231,75 @@ pub(super) fn tolerances(
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<BoundSpec, BoundError> {
+        s.parse()
+    }
+
+    #[test]
+    fn a_slide_bound_is_a_speed() {
+        assert_eq!(parse("slide:20mm/s"), Ok(BoundSpec::Slide(20.0)));
+        assert_eq!(parse("slide:2cm/s"), Ok(BoundSpec::Slide(20.0)));
+        assert_eq!(parse("slide:0.1m/s"), Ok(BoundSpec::Slide(100.0)));
+        for bad in ["slide:20mm", "slide:1deg/s", "slide:fast"] {
+            assert!(
+                matches!(
+                    parse(bad),
+                    Err(BoundError::SlideNotSpeed(_)) | Err(BoundError::NotANumber { .. })
+                ),
+                "{bad}: {:?}",
+                parse(bad)
+            );
+        }
+        assert!(matches!(
+            parse("slide:-3mm/s"),
+            Err(BoundError::NotPositive(_))
+        ));
+    }
+
+    /// Alone, a slide bound keeps the default angle bound beside it; with
+    /// others, the tightest slide wins; it holds on the slide above the
+    /// source's own, and on a take with no planted foot.
+    #[test]
+    fn a_slide_bound_holds_on_the_slide_above_the_sources() {
+        let alone = Bound::from_specs(&[BoundSpec::Slide(50.0)]);
+        assert_eq!(
+            (alone.angle_deg, alone.foot_slide_mm_s),
+            (Some(1.0), Some(50.0))
+        );
+        let b = Bound::from_specs(&[
+            BoundSpec::Millimetres(50.0),
+            BoundSpec::Slide(80.0),
+            BoundSpec::Slide(40.0),
+        ]);
+        assert_eq!((b.angle_deg, b.foot_slide_mm_s), (None, Some(40.0)));
+        assert_eq!(b.to_string(), "50 mm and foot slide +40 mm/s");
+        let m = |slide: f64, pairs: usize| Metrics {
+            bytes: 1,
+            ratio_f32: 1.0,
+            ratio_file: 0.0,
+            arms_mm: 1.0,
+            max_joint_err_mm: 10.0,
+            max_joint_err_joint: String::new(),
+            max_joint_err_frame: 0,
+            distortion_pct: 0.0,
+            angle_rms_deg: 0.0,
+            angle_max_deg: 0.0,
+            position_max_mm: 0.0,
+            foot_pairs: pairs,
+            foot_slide_mm_s: slide,
+            foot_slide_source_mm_s: 100.0,
+            foot_height_err_mm: 0.0,
+            frames: 1,
+            channels: 1,
+        };
+        assert!(b.holds(&m(140.0, 10)));
+        assert!(!b.holds(&m(141.0, 10)));
+        assert!(b.holds(&m(900.0, 0)), "no planted foot, nothing to slide");
+    }
 }

@@ -79,8 +79,8 @@ pub enum ShowError {
         clip: String,
         /// Its source.
         file: String,
-        /// Why.
-        source: EncodeError,
+        /// Why (boxed: an encode error carries the bound).
+        source: Box<EncodeError>,
     },
     /// A servo clip could not be encoded.
     #[error("clip `{clip}` ({file}): {source}")]
@@ -89,8 +89,8 @@ pub enum ShowError {
         clip: String,
         /// Its source.
         file: String,
-        /// Why.
-        source: ServoClipError,
+        /// Why (boxed: it may carry an encode error and its bound).
+        source: Box<ServoClipError>,
     },
     /// The rig of a servo show is wrong.
     #[error(transparent)]
@@ -314,7 +314,7 @@ pub fn build_with<'a>(
             |source| ShowError::Encode {
                 clip: c0.name.clone(),
                 file: c0.file.display().to_string(),
-                source,
+                source: Box::new(source),
             },
         )?;
         let model = databases.len();
@@ -449,7 +449,7 @@ fn encode_one(
         .map_err(|source| ShowError::Servo {
             clip: c.name.clone(),
             file: file.clone(),
-            source,
+            source: Box::new(source),
         })?;
         return Ok(Single {
             proof: format!(
@@ -478,7 +478,7 @@ fn encode_one(
     .map_err(|source| ShowError::Encode {
         clip: c.name.clone(),
         file,
-        source,
+        source: Box::new(source),
     })?;
     let x = &enc.metrics;
     Ok(Single {
