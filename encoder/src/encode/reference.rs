@@ -21,6 +21,9 @@ pub struct Reference {
     pub(super) levers_um: Vec<f64>,
     /// Joint of each channel.
     pub(super) joint_of: Vec<usize>,
+    /// Whether each channel moves a foot: its joint is a foot
+    /// ([`crate::contacts::foot_joints`]) or one of a foot's ancestors.
+    pub(super) moves_feet: Vec<bool>,
     /// Metres per source length unit.
     pub(super) metres_per_unit: f64,
 }
@@ -29,14 +32,27 @@ impl Reference {
     /// Measures `m` once: its fixed-point channels, joint positions and
     /// lever arms, with `metres_per_unit` metres per source length unit.
     pub fn new(m: &Motion, metres_per_unit: f64) -> Reference {
+        let original_mm = metrics::positions_mm(m, metres_per_unit);
+        let joints = &m.skeleton.joints;
+        let mut on_chain = vec![false; joints.len()];
+        let first = original_mm.get(..joints.len()).unwrap_or(&[]);
+        for foot in crate::contacts::foot_joints(&m.skeleton, first) {
+            let mut j = Some(foot);
+            while let Some(i) = j.filter(|&i| !on_chain[i]) {
+                on_chain[i] = true;
+                j = joints[i].parent;
+            }
+        }
+        let joint_of = m.skeleton.channel_joints();
         Reference {
             fixed: fixed::to_fixed(m, metres_per_unit),
-            original_mm: metrics::positions_mm(m, metres_per_unit),
+            moves_feet: joint_of.iter().map(|&j| on_chain[j]).collect(),
+            original_mm,
             levers_um: kinematics::lever_arms(&m.skeleton)
                 .into_iter()
                 .map(|l| l * metres_per_unit * 1e6)
                 .collect(),
-            joint_of: m.skeleton.channel_joints(),
+            joint_of,
             metres_per_unit,
         }
     }
@@ -55,14 +71,32 @@ impl Reference {
     /// budget `s_um` (µm; `None` = no position bound), scaled by `tighten`:
     /// the tolerances the encode pipeline gives its own codecs.
     pub fn tolerances(&self, bound: &Bound, s_um: Option<f64>, tighten: f64) -> Vec<i64> {
-        bound::tolerances(
+        self.tolerances_with_feet(bound, s_um, tighten, 1.0)
+    }
+
+    /// [`Self::tolerances`] with the channels that move a foot scaled by
+    /// `feet` (≤ 1: the feet held tighter than the rest, for a slide bound).
+    pub fn tolerances_with_feet(
+        &self,
+        bound: &Bound,
+        s_um: Option<f64>,
+        tighten: f64,
+        feet: f64,
+    ) -> Vec<i64> {
+        let mut t = bound::tolerances(
             &self.fixed,
             bound,
             &self.levers_um,
             &self.joint_of,
             s_um,
             tighten,
-        )
+        );
+        if feet < 1.0 {
+            for (t, _) in t.iter_mut().zip(&self.moves_feet).filter(|(_, &m)| m) {
+                *t = (*t as f64 * feet).floor() as i64;
+            }
+        }
+        t
     }
 
     /// Measures decoded frames (frame-major `frames × channels` fixed-point

@@ -329,26 +329,76 @@ pub(super) fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
     mut run: impl FnMut(&[i64]) -> Result<T, E>,
     mut round: impl FnMut(usize, usize),
 ) -> Result<(T, usize), E> {
+    let mut run = |s_um: Option<f64>, tighten: f64, feet: f64| {
+        run(&input.tolerances_with_feet(bound, s_um, tighten, feet))
+    };
+    let Some(_) = bound.foot_slide_mm_s else {
+        let (best, attempts, _) = search_budget(bound, bound, |s, t| run(s, t, 1.0), &mut round)?;
+        return Ok((best, attempts));
+    };
+    // A slide bound: first the budget under the other bounds, then, if the
+    // feet slide too much there, the channels that move them tightened
+    // alone (a log-bisection of their factor); only if that fails, the
+    // whole budget under every bound.
+    let others = Bound {
+        foot_slide_mm_s: None,
+        ..*bound
+    };
+    let (first, mut attempts, (s_um, tighten)) =
+        search_budget(&others, bound, |s, t| run(s, t, 1.0), &mut round)?;
+    if bound.holds(first.metrics()) {
+        return Ok((first, attempts));
+    }
+    let range = (1.0 / 256.0, 1.0);
+    let rounds = attempts + bisect_rounds(range, 10, 1.05);
+    let (feet, _, n) = bisect(
+        bound,
+        range,
+        10,
+        1.05,
+        |f| run(s_um, tighten, f),
+        |n| round(attempts + n, rounds),
+    )?;
+    attempts += n;
+    if let Some(best) = feet {
+        return Ok((best, attempts));
+    }
+    let (best, n, _) = search_budget(bound, bound, |s, t| run(s, t, 1.0), &mut round)?;
+    Ok((best, attempts + n))
+}
+
+/// What [`search_budget`] found: the attempt, the attempts made, and the
+/// position budget (µm) and tightening it was made with.
+type Budgeted<T> = (T, usize, (Option<f64>, f64));
+
+/// The largest position budget (or, without a position bound, the least
+/// tightening of the angle tolerances) whose attempt meets `bound`; errors
+/// name `named`, the bound as asked.
+fn search_budget<T: Trial, E: From<EncodeError>>(
+    bound: &Bound,
+    named: &Bound,
+    mut run: impl FnMut(Option<f64>, f64) -> Result<T, E>,
+    round: &mut impl FnMut(usize, usize),
+) -> Result<Budgeted<T>, E> {
     let mut attempts = 0;
     let mut tighten = 1.0;
-    let mut run = |s_um: Option<f64>, tighten: f64| run(&input.tolerances(bound, s_um, tighten));
     // Under an ARMS bound alone the position budget is bisected too, up to
     // eight times the ARMS (the largest error of a joint is a few times the
     // mean).
     let position = bound
         .position_mm
         .or(bound.arms_mm.map(|a| a * ARMS_BUDGET_SCALE));
-    let best = match position {
+    match position {
         None => loop {
             attempts += 1;
             round(attempts, attempts);
             let a = run(None, tighten)?;
             if bound.holds(a.metrics()) {
-                break a;
+                return Ok((a, attempts, (None, tighten)));
             }
             if attempts >= 8 {
                 return Err(EncodeError::BoundNotMetAfter {
-                    bound: *bound,
+                    bound: *named,
                     attempts,
                 }
                 .into());
@@ -368,21 +418,21 @@ pub(super) fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
                 |n| round(n, rounds),
             )?;
             attempts += n;
-            match best {
+            let best = match best {
                 Some(b) => b,
                 None => {
                     attempts += 1;
                     round(attempts, attempts);
                     let a = run(Some(lo), 1.0)?;
                     if !bound.holds(a.metrics()) {
-                        return Err(EncodeError::BoundNotMet { bound: *bound }.into());
+                        return Err(EncodeError::BoundNotMet { bound: *named }.into());
                     }
                     a
                 }
-            }
+            };
+            Ok((best, attempts, (Some(lo), 1.0)))
         }
-    };
-    Ok((best, attempts))
+    }
 }
 
 #[cfg(test)]
