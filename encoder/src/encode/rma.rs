@@ -96,7 +96,13 @@ pub(super) fn encode_rma(
             own_frames: own_caches(plan, frames),
             joined: joined_caches(plan, frames),
         };
-        let encoded = search_tau(opts, CodecChoice::Rma, progress, |tau| job.run(plan, tau))?;
+        let encoded = search_tau(opts, CodecChoice::Rma, progress, |tau, feet| {
+            if feet < 1.0 {
+                job.with_feet(plan, feet).run(plan, tau)
+            } else {
+                job.run(plan, tau)
+            }
+        })?;
         if best
             .as_ref()
             .is_none_or(|b| encoded.bytes.len() < b.bytes.len())
@@ -161,7 +167,21 @@ struct Made {
     attempt: Attempt,
 }
 
-impl Job<'_> {
+impl<'a> Job<'a> {
+    /// The job with the channels that move a foot weighing `1 / feet` times
+    /// more (a slide bound's second step), with PPCA caches of its own.
+    fn with_feet(&self, plan: &Plan, feet: f64) -> Job<'a> {
+        let frames = self.m.frames();
+        Job {
+            weights: super::search::with_feet(&self.weights, &self.reference.moves_feet, feet),
+            groups: self.groups.clone(),
+            consts: self.consts.clone(),
+            own_frames: own_caches(plan, frames),
+            joined: joined_caches(plan, frames),
+            ..*self
+        }
+    }
+
     /// The body's parameters at `τ` for the own stretches.
     fn params(&self, tau: f64) -> pca_spline::Params {
         pca_spline::Params {

@@ -173,7 +173,12 @@ pub(super) fn encode_pca(
     };
     let fps = 1.0 / m.frame_time;
     let cache = pca_spline::Cache::default();
-    let run = |tau: f64| -> Result<Attempt, EncodeError> {
+    let run = |tau: f64, feet: f64| -> Result<Attempt, EncodeError> {
+        let held = (feet < 1.0).then(|| with_feet(&weights, &reference.moves_feet, feet));
+        let input = pca_spline::Input {
+            weights: held.as_deref().unwrap_or(&weights),
+            ..input
+        };
         let params = pca_spline::Params {
             key_bits: opts.key_bits.map(|b| b.0),
             ..pca_spline::Params::new(tau, fps)
@@ -201,28 +206,88 @@ pub(super) fn encode_pca(
     search_tau(opts, CodecChoice::PcaSpline, progress, run)
 }
 
+/// `weights` with the channels that move a foot weighing `1 / feet` times
+/// more (their share of the tolerance `feet` times smaller).
+pub(super) fn with_feet(weights: &[f64], moves_feet: &[bool], feet: f64) -> Vec<f64> {
+    weights
+        .iter()
+        .zip(moves_feet)
+        .map(|(&w, &m)| if m { w / feet } else { w })
+        .collect()
+}
+
 /// The search of the codecs driven by one weighted tolerance `τ`
 /// (`pca-spline`, `rma`): a log-bisection of `τ` from 1/256 to twice the
-/// bound's scale for the largest `τ` whose clip (made and proven by `run`)
-/// meets the bound, then a few probes just above it (size and error are not
-/// quite monotonic in `τ`); the smallest clip that holds.
+/// bound's scale for the largest `τ` whose clip (made and proven by
+/// `run(τ, 1)`) meets the bound, then a few probes just above it (size and
+/// error are not quite monotonic in `τ`); the smallest clip that holds.
+/// Under a slide bound: that search under the other bounds first; if the
+/// feet slide too much there, the weight of the channels that move a foot
+/// raised alone at that `τ` (`run(τ, f)` divides their tolerance's share by
+/// `1 / f`, `f` log-bisected); only if that fails, `τ` under every bound.
 pub(super) fn search_tau(
     opts: &EncodeOptions,
     codec: CodecChoice,
     progress: &dyn Progress,
-    run: impl Fn(f64) -> Result<Attempt, EncodeError> + Sync,
+    run: impl Fn(f64, f64) -> Result<Attempt, EncodeError> + Sync,
 ) -> Result<Encoded, EncodeError> {
-    let scale = match (
-        opts.bound.position_mm.or(opts.bound.arms_mm),
-        opts.bound.angle_deg,
-    ) {
+    let done = |best: Attempt, attempts| Encoded {
+        bytes: best.bytes,
+        metrics: best.metrics,
+        codec,
+        key_interval: 0,
+        attempts,
+    };
+    let Some(_) = opts.bound.foot_slide_mm_s else {
+        let (best, _, attempts) =
+            search_tau_under(&opts.bound, opts, codec, progress, |t| run(t, 1.0))?;
+        return Ok(done(best, attempts));
+    };
+    let others = Bound {
+        foot_slide_mm_s: None,
+        ..opts.bound
+    };
+    let (first, tau, mut attempts) =
+        search_tau_under(&others, opts, codec, progress, |t| run(t, 1.0))?;
+    if opts.bound.holds(&first.metrics) {
+        return Ok(done(first, attempts));
+    }
+    let range = (1.0 / 256.0, 1.0);
+    let rounds = attempts + bisect_rounds(range, 10, 1.05);
+    let (feet, _, n) = bisect(
+        &opts.bound,
+        range,
+        10,
+        1.05,
+        |f| run(tau, f),
+        |n| progress.round(codec, attempts + n, rounds),
+    )?;
+    attempts += n;
+    if let Some(best) = feet {
+        return Ok(done(best, attempts));
+    }
+    let (best, _, n) = search_tau_under(&opts.bound, opts, codec, progress, |t| run(t, 1.0))?;
+    Ok(done(best, attempts + n))
+}
+
+/// [`search_tau`]'s search of `τ` under `bound` (errors name the bound
+/// asked, `opts.bound`): the smallest clip that holds, the largest `τ` the
+/// bisection found holding, and the attempts made.
+fn search_tau_under(
+    bound: &Bound,
+    opts: &EncodeOptions,
+    codec: CodecChoice,
+    progress: &dyn Progress,
+    run: impl Fn(f64) -> Result<Attempt, EncodeError> + Sync,
+) -> Result<(Attempt, f64, usize), EncodeError> {
+    let scale = match (bound.position_mm.or(bound.arms_mm), bound.angle_deg) {
         (Some(p), _) => p,
         (None, Some(d)) => d,
         (None, None) => Bound::DEFAULT_TRANSLATION_MM,
     };
     let range = (scale / 256.0, scale * 2.0);
     let rounds = bisect_rounds(range, 20, 1.02) + 6;
-    let (mut best, lo, mut attempts) = bisect(&opts.bound, range, 20, 1.02, &run, |n| {
+    let (mut best, lo, mut attempts) = bisect(bound, range, 20, 1.02, &run, |n| {
         progress.round(codec, n, rounds)
     })?;
     // Size and error are not quite monotonic in τ: probe a little above
@@ -243,9 +308,7 @@ pub(super) fn search_tau(
     for a in probes {
         attempts += 1;
         let a = a?;
-        if opts.bound.holds(&a.metrics)
-            && best.as_ref().is_none_or(|b| a.bytes.len() < b.bytes.len())
-        {
+        if bound.holds(&a.metrics) && best.as_ref().is_none_or(|b| a.bytes.len() < b.bytes.len()) {
             best = Some(a);
         }
     }
@@ -255,7 +318,7 @@ pub(super) fn search_tau(
             attempts += 1;
             progress.round(codec, attempts, attempts);
             let a = run(lo)?;
-            if !opts.bound.holds(&a.metrics) {
+            if !bound.holds(&a.metrics) {
                 return Err(EncodeError::PcaBoundNotMet {
                     codec,
                     bound: opts.bound,
@@ -266,13 +329,7 @@ pub(super) fn search_tau(
             a
         }
     };
-    Ok(Encoded {
-        bytes: best.bytes,
-        metrics: best.metrics,
-        codec,
-        key_interval: 0,
-        attempts,
-    })
+    Ok((best, lo, attempts))
 }
 
 /// Encodes with a codec driven by per-channel tolerances (`index`,
