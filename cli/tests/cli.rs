@@ -812,6 +812,26 @@ fn encode_rma_plots_the_analysis_and_the_kept_clips() {
     );
 }
 
+/// `--bound` is `--max-error` by the name the docs use (users typed it and
+/// were offered `--budget`).
+#[test]
+fn bound_is_another_name_of_max_error() {
+    let d = out_dir("bound_alias");
+    let (a, b) = (d.join("a.mcb"), d.join("b.mcb"));
+    for (flag, out) in [("--max-error", &a), ("--bound", &b)] {
+        let o = mocap(&[
+            "encode",
+            "assets/animatronic_demo.bvh",
+            "-o",
+            out.to_str().unwrap(),
+            flag,
+            "2deg",
+        ]);
+        assert!(o.status.success(), "{flag}: {}", text(&o.stderr));
+    }
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
 #[test]
 fn bench_reads_a_c3d_marker_file() {
     let d = out_dir("bench-c3d");

@@ -90,7 +90,7 @@ pub struct Args {
     paths: Vec<PathBuf>,
     /// Error bounds, repeatable; `+` joins several into one
     /// (`50mm+arms:10mm`).
-    #[arg(long = "max-error", default_values = ["1deg", "0.25deg"])]
+    #[arg(long = "max-error", visible_alias = "bound", default_values = ["1deg", "0.25deg"])]
     max_error: Vec<String>,
     /// Codecs and baselines, repeatable, in the table's order (`auto` keeps
     /// the smallest of our codecs per file).

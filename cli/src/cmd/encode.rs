@@ -46,7 +46,7 @@ pub struct Args {
     /// others); `+` joins several in one value. Default: `1deg`;
     /// a C3D marker file takes lengths only (the marker position error),
     /// default `1mm`.
-    #[arg(long = "max-error", value_parser = parse_bounds)]
+    #[arg(long = "max-error", visible_alias = "bound", value_parser = parse_bounds)]
     max_error: Vec<Vec<BoundSpec>>,
     /// Length unit of the input (auto: the ASF's declared unit or a C3D
     /// file's POINT:UNITS, else from the skeleton's height).
