@@ -751,8 +751,6 @@ fn bench_prints_baselines_beside_the_codecs() {
     assert!(!versus.contains("raw16 |"), "{out}");
 }
 
-/// `mocap bench` reads a C3D marker file: marker rows at a length bound,
-/// the angle bound skipped with a note.
 /// `mocap encode --codec rma --plot`: the demo played twice keeps its
 /// second playing as one repeated clip, and the picture says so; `--plot`
 /// with another codec is refused with what to use instead.
@@ -832,6 +830,8 @@ fn bound_is_another_name_of_max_error() {
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
 
+/// `mocap bench` reads a C3D marker file: marker rows at a length bound,
+/// the angle bound skipped with a note.
 #[test]
 fn bench_reads_a_c3d_marker_file() {
     let d = out_dir("bench-c3d");

@@ -153,16 +153,18 @@ impl Contacts {
     pub fn find(skeleton: &Skeleton, positions: &[[f64; 3]], frame_time: f64) -> Contacts {
         let joints = skeleton.joints.len().max(1);
         let frames = positions.len() / joints;
-        let feet = foot_joints(skeleton, positions.get(..joints).unwrap_or(&[]));
+        let first = positions.get(..joints).unwrap_or(&[]);
+        let feet = foot_joints(skeleton, first);
         // Up as the take stands (a root may turn a Z-up rest pose Y-up).
-        let (up, sign) = match positions.get(..joints) {
-            Some(first) if frames > 0 => up_axis_of(first, &feet),
-            _ => (1, 1.0),
+        let (up, sign) = if first.is_empty() {
+            (1, 1.0)
+        } else {
+            up_axis_of(first, &feet)
         };
         let mut planted = vec![false; frames.saturating_sub(1) * feet.len()];
         if frames >= 2 {
             // The figure's height from the take itself (mm, whatever the units).
-            let (lo, hi) = extent(&positions[..joints], up);
+            let (lo, hi) = extent(first, up);
             let height = (hi - lo).max(1.0);
             let near = 0.025 * height;
             let step = 0.15 * height * frame_time.max(1e-6);
@@ -182,9 +184,18 @@ impl Contacts {
         Contacts { up, feet, planted }
     }
 
-    /// Planted foot-frame pairs.
-    pub fn pairs(&self) -> usize {
-        self.planted.iter().filter(|&&p| p).count()
+    /// Per joint of `skeleton` (the one the contacts were found on):
+    /// whether it moves a foot — a foot, or one of a foot's ancestors.
+    pub fn moving_feet(&self, skeleton: &Skeleton) -> Vec<bool> {
+        let mut moves = vec![false; skeleton.joints.len()];
+        for &foot in &self.feet {
+            let mut j = Some(foot);
+            while let Some(i) = j.filter(|&i| !moves[i]) {
+                moves[i] = true;
+                j = skeleton.joints[i].parent;
+            }
+        }
+        moves
     }
 
     /// A meter of a decoded take against `source` (the positions the

@@ -61,13 +61,36 @@ pub fn positions_mm(m: &Motion, metres_per_unit: f64) -> Vec<[f64; 3]> {
     all
 }
 
+/// The source side of a comparison, measured once: every joint's position
+/// (mm, as [`positions_mm`]) and the planted feet ([`Contacts`]).
+#[derive(Clone, Debug)]
+pub struct Source {
+    /// `positions[f * joints + j]`, mm.
+    pub positions: Vec<[f64; 3]>,
+    /// Where the feet stand.
+    pub contacts: Contacts,
+}
+
+impl Source {
+    /// Measures `m` with `metres_per_unit` metres per length unit.
+    pub fn of(m: &Motion, metres_per_unit: f64) -> Source {
+        let positions = positions_mm(m, metres_per_unit);
+        let contacts = Contacts::find(&m.skeleton, &positions, m.frame_time);
+        Source {
+            positions,
+            contacts,
+        }
+    }
+}
+
 /// Compares `decoded` with `original` (same skeleton and frame count).
-/// `original_positions` may be passed in to skip recomputing them.
+/// `source` ([`Source::of`] the original) may be passed in to skip
+/// measuring it again.
 pub fn compare(
     original: &Motion,
     decoded: &Motion,
     metres_per_unit: f64,
-    original_positions: Option<&[[f64; 3]]>,
+    source: Option<&Source>,
     bytes: usize,
     input_bytes: usize,
 ) -> Metrics {
@@ -80,7 +103,7 @@ pub fn compare(
             out.extend_from_slice(decoded.frame(f));
         },
         metres_per_unit,
-        original_positions,
+        source,
         bytes,
         input_bytes,
     )
@@ -99,29 +122,25 @@ pub fn compare_frames(
     decoded_frames: usize,
     mut decoded_frame: impl FnMut(usize, &mut Vec<f64>),
     metres_per_unit: f64,
-    original_positions: Option<&[[f64; 3]]>,
+    source: Option<&Source>,
     bytes: usize,
     input_bytes: usize,
 ) -> Metrics {
     let frames = original.frames().min(decoded_frames);
     let channels = original.channels();
     let own;
-    let a = match original_positions {
-        Some(p) => p,
+    let source = match source {
+        Some(s) => s,
         None => {
-            own = positions_mm(original, metres_per_unit);
+            own = Source::of(original, metres_per_unit);
             &own
         }
     };
+    let a = &source.positions;
     let joints = original.skeleton.joints.len().max(1);
     let mm = metres_per_unit * 1000.0;
     let kinds = original.skeleton.channel_kinds();
-    let contacts = Contacts::find(
-        &original.skeleton,
-        &a[..(frames * joints).min(a.len())],
-        original.frame_time,
-    );
-    let mut feet = contacts.meter(a, joints, original.frame_time);
+    let mut feet = source.contacts.meter(a, joints, original.frame_time);
     let mut b_mm = Vec::with_capacity(joints);
 
     let mut arms_sum = 0.0;

@@ -71,11 +71,7 @@ fn rma_random_access_equals_sequential() {
     let twice = mocap_tests::demo_played_twice();
     let bytes = clip_of(&twice, CodecChoice::Rma, "20mm", None);
     let clip = Clip::parse(&bytes).unwrap();
-    let section = clip
-        .sections()
-        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)
-        .expect("an rma section");
-    let info = mocap_encoder::codec::rma::section::inspect(section.bytes).unwrap();
+    let info = mocap_encoder::codec::rma::section::inspect_clip(&bytes).expect("an rma section");
     assert_eq!(info.repeated, 1, "the second playing is a repeated clip");
     // Read back as written: it lies in the second playing and refers to
     // the first.
@@ -376,11 +372,7 @@ fn rma_scratch_over_the_cache_plays_the_same() {
     m.values.extend_from_slice(&head);
     let bytes = clip_of(&m, CodecChoice::Rma, "20mm", None);
     let clip = Clip::parse(&bytes).unwrap();
-    let section = clip
-        .sections()
-        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)
-        .expect("an rma section");
-    let info = mocap_encoder::codec::rma::section::inspect(section.bytes).unwrap();
+    let info = mocap_encoder::codec::rma::section::inspect_clip(&bytes).expect("an rma section");
     let frames = clip.header().frame_count();
     assert!(info.repeated >= 1, "the replay is a repeated clip");
     assert!(info.repeated_frames * 4 <= frames as usize, "{info:?}");

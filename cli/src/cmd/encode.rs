@@ -313,11 +313,7 @@ pub fn run(a: Args) -> super::Result {
 fn plot_rma(path: &Path, m: &Motion, enc: &encode::Encoded, input: &Path) -> super::Result {
     use mocap_encoder::codec::rma;
     let analysis = rma::analyse(m, &rma::Params::default());
-    let clip = mocap_decoder::Clip::parse(&enc.bytes).map_err(|e| format!("{e:?}"))?;
-    let kept = clip
-        .sections()
-        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)
-        .and_then(|s| rma::section::inspect(s.bytes))
+    let kept = rma::section::inspect_clip(&enc.bytes)
         .map(|info| info.clips)
         .unwrap_or_default();
     let name = input.file_name().unwrap_or_default().to_string_lossy();

@@ -246,49 +246,35 @@ impl<'a> RmaCodec<'a> {
             .after
             .filter(|c| frac > 0 && c.start == frame.wrapping_add(1))
             .map(|c| (c, frac));
-        let c = self.channels;
-        if !self.few_repeats || words.len() >= c.wrapping_add(self.t_cache) {
-            // The scratch beside both caches.
-            let (scratch, caches) = words.split_at_mut_checked(c)?;
-            let (cache_t, cache_ref) = caches.split_at_mut(self.t_cache.min(caches.len()));
-            self.body.decode_at(pos, segment, out, cache_t)?;
-            for (clip, weight) in here.into_iter().chain(after) {
-                self.add_clip(&clip, weight, pos, reference, scratch, cache_ref, out)?;
-            }
-            return Some(());
-        }
-        // The scratch over the start of `t`'s cache.
-        let half = self.t_cache.min(words.len());
+        // Where `t`'s cache lies, and where `Ref(t)`'s starts: after the
+        // scratch pose and `t`'s cache, or with too few words (and few
+        // repeated poses) `t`'s cache from the start, under the scratch.
+        let (c, len) = (self.channels, words.len());
+        let overlay = self.few_repeats && len < c.wrapping_add(self.t_cache);
+        let (cache_t, ref_at) = if overlay {
+            let t = self.t_cache.min(len);
+            (0..t, t.max(c))
+        } else {
+            let t = self.t_cache.min(len.saturating_sub(c));
+            (c..c.wrapping_add(t), c.wrapping_add(t))
+        };
         self.body
-            .decode_at(pos, segment, out, words.get_mut(..half)?)?;
+            .decode_at(pos, segment, out, words.get_mut(cache_t)?)?;
         if here.is_none() && after.is_none() {
             return Some(());
         }
         let (scratch, tail) = words.split_at_mut_checked(c)?;
-        let cache_ref = tail.get_mut(half.saturating_sub(c)..).unwrap_or(&mut []);
+        let cache_ref = tail.get_mut(ref_at.wrapping_sub(c)..).unwrap_or(&mut []);
         for (clip, weight) in here.into_iter().chain(after) {
-            self.add_clip(&clip, weight, pos, reference, scratch, cache_ref, out)?;
+            let at = ref_position(&clip, pos, self.frames)?;
+            self.body.decode_at(at, reference, scratch, cache_ref)?;
+            self.add_runs(scratch, weight, out)?;
         }
-        PcaSplineCodec::forget(words);
+        if overlay {
+            // The scratch pose was written over `t`'s cache.
+            PcaSplineCodec::forget(words);
+        }
         Some(())
-    }
-
-    /// Adds clip `c`'s primary at `Ref(pos)`, weighted (§12.3 step 3),
-    /// evaluated into `scratch` through `cache`.
-    #[allow(clippy::too_many_arguments)] // the pose, its two buffers and the body's cursor
-    fn add_clip(
-        &self,
-        c: &RepeatedClip<'a>,
-        weight: i64,
-        pos: u64,
-        reference: &mut Cursor<'a>,
-        scratch: &mut [i32],
-        cache: &mut [i32],
-        out: &mut [i32],
-    ) -> Option<()> {
-        let at = ref_position(c, pos, self.frames)?;
-        self.body.decode_at(at, reference, scratch, cache)?;
-        self.add_runs(scratch, weight, out)
     }
 
     /// `out += (scratch · weight) >> 16` on the added channels (exactly

@@ -15,8 +15,8 @@ use crate::motion::Motion;
 pub struct Reference {
     /// The motion in fixed point (SPEC.md §3.3).
     pub(super) fixed: FixedChannels,
-    /// Joint positions of the input, mm (`[joint][xyz]` per frame).
-    pub(super) original_mm: Vec<[f64; 3]>,
+    /// Joint positions of the input (mm) and its planted feet.
+    pub(super) source: metrics::Source,
     /// Lever arm of each joint, µm.
     pub(super) levers_um: Vec<f64>,
     /// Joint of each channel.
@@ -32,22 +32,13 @@ impl Reference {
     /// Measures `m` once: its fixed-point channels, joint positions and
     /// lever arms, with `metres_per_unit` metres per source length unit.
     pub fn new(m: &Motion, metres_per_unit: f64) -> Reference {
-        let original_mm = metrics::positions_mm(m, metres_per_unit);
-        let joints = &m.skeleton.joints;
-        let mut on_chain = vec![false; joints.len()];
-        let first = original_mm.get(..joints.len()).unwrap_or(&[]);
-        for foot in crate::contacts::foot_joints(&m.skeleton, first) {
-            let mut j = Some(foot);
-            while let Some(i) = j.filter(|&i| !on_chain[i]) {
-                on_chain[i] = true;
-                j = joints[i].parent;
-            }
-        }
+        let source = metrics::Source::of(m, metres_per_unit);
+        let moves = source.contacts.moving_feet(&m.skeleton);
         let joint_of = m.skeleton.channel_joints();
         Reference {
             fixed: fixed::to_fixed(m, metres_per_unit),
-            moves_feet: joint_of.iter().map(|&j| on_chain[j]).collect(),
-            original_mm,
+            moves_feet: joint_of.iter().map(|&j| moves[j]).collect(),
+            source,
             levers_um: kinematics::lever_arms(&m.skeleton)
                 .into_iter()
                 .map(|l| l * metres_per_unit * 1e6)
@@ -118,7 +109,7 @@ impl Reference {
                 fixed::extend_from_fixed(&kinds, frame, self.metres_per_unit, out);
             },
             self.metres_per_unit,
-            Some(&self.original_mm),
+            Some(&self.source),
             bytes,
             0,
         )

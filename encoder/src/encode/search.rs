@@ -231,55 +231,74 @@ pub(super) fn search_tau(
     progress: &dyn Progress,
     run: impl Fn(f64, f64) -> Result<Attempt, EncodeError> + Sync,
 ) -> Result<Encoded, EncodeError> {
-    let done = |best: Attempt, attempts| Encoded {
+    let (best, attempts) = search_with_slide(
+        &opts.bound,
+        |b| search_tau_under(b, opts, codec, progress, |t| run(t, 1.0)),
+        &run,
+        |n, rounds| progress.round(codec, n, rounds),
+    )?;
+    Ok(Encoded {
         bytes: best.bytes,
         metrics: best.metrics,
         codec,
         key_interval: 0,
         attempts,
-    };
-    let Some(_) = opts.bound.foot_slide_mm_s else {
-        let (best, _, attempts) =
-            search_tau_under(&opts.bound, opts, codec, progress, |t| run(t, 1.0))?;
-        return Ok(done(best, attempts));
-    };
+    })
+}
+
+/// A search under `bound`, in two steps when it limits the foot slide:
+/// `search(b)` (the best try under `b`, the tries made, and the parameter
+/// it was made with) under the other bounds first; if the feet slide too
+/// much there, `feet(p, f)` at that parameter with the channels that move
+/// a foot held `f` times tighter, `f` log-bisected in `[1/256, 1]`; only
+/// if no `f` holds, `search` under every bound. `round(n, rounds)` reports
+/// the feet's tries, counted on from the first step's.
+fn search_with_slide<T: Trial, P: Copy, E>(
+    bound: &Bound,
+    search: impl Fn(&Bound) -> Result<(T, usize, P), E>,
+    feet: impl Fn(P, f64) -> Result<T, E>,
+    round: impl Fn(usize, usize),
+) -> Result<(T, usize), E> {
+    if bound.foot_slide_mm_s.is_none() {
+        let (best, attempts, _) = search(bound)?;
+        return Ok((best, attempts));
+    }
     let others = Bound {
         foot_slide_mm_s: None,
-        ..opts.bound
+        ..*bound
     };
-    let (first, tau, mut attempts) =
-        search_tau_under(&others, opts, codec, progress, |t| run(t, 1.0))?;
-    if opts.bound.holds(&first.metrics) {
-        return Ok(done(first, attempts));
+    let (first, mut attempts, at) = search(&others)?;
+    if bound.holds(first.metrics()) {
+        return Ok((first, attempts));
     }
     let range = (1.0 / 256.0, 1.0);
     let rounds = attempts + bisect_rounds(range, 10, 1.05);
-    let (feet, _, n) = bisect(
-        &opts.bound,
+    let (held, _, n) = bisect(
+        bound,
         range,
         10,
         1.05,
-        |f| run(tau, f),
-        |n| progress.round(codec, attempts + n, rounds),
+        |f| feet(at, f),
+        |n| round(attempts + n, rounds),
     )?;
     attempts += n;
-    if let Some(best) = feet {
-        return Ok(done(best, attempts));
+    if let Some(best) = held {
+        return Ok((best, attempts));
     }
-    let (best, _, n) = search_tau_under(&opts.bound, opts, codec, progress, |t| run(t, 1.0))?;
-    Ok(done(best, attempts + n))
+    let (best, n, _) = search(bound)?;
+    Ok((best, attempts + n))
 }
 
 /// [`search_tau`]'s search of `τ` under `bound` (errors name the bound
-/// asked, `opts.bound`): the smallest clip that holds, the largest `τ` the
-/// bisection found holding, and the attempts made.
+/// asked, `opts.bound`): the smallest clip that holds, the attempts made,
+/// and the largest `τ` the bisection found holding.
 fn search_tau_under(
     bound: &Bound,
     opts: &EncodeOptions,
     codec: CodecChoice,
     progress: &dyn Progress,
     run: impl Fn(f64) -> Result<Attempt, EncodeError> + Sync,
-) -> Result<(Attempt, f64, usize), EncodeError> {
+) -> Result<(Attempt, usize, f64), EncodeError> {
     let scale = match (bound.position_mm.or(bound.arms_mm), bound.angle_deg) {
         (Some(p), _) => p,
         (None, Some(d)) => d,
@@ -329,7 +348,7 @@ fn search_tau_under(
             a
         }
     };
-    Ok((best, lo, attempts))
+    Ok((best, attempts, lo))
 }
 
 /// Encodes with a codec driven by per-channel tolerances (`index`,
@@ -373,7 +392,7 @@ const ARMS_BUDGET_SCALE: f64 = 8.0;
 pub fn search_tolerances<T: Trial, E: From<EncodeError>>(
     input: &Reference,
     bound: &Bound,
-    run: impl FnMut(&[i64]) -> Result<T, E>,
+    run: impl Fn(&[i64]) -> Result<T, E>,
 ) -> Result<(T, usize), E> {
     search_tolerances_with(input, bound, run, |_, _| {})
 }
@@ -383,45 +402,18 @@ pub fn search_tolerances<T: Trial, E: From<EncodeError>>(
 pub(super) fn search_tolerances_with<T: Trial, E: From<EncodeError>>(
     input: &Reference,
     bound: &Bound,
-    mut run: impl FnMut(&[i64]) -> Result<T, E>,
-    mut round: impl FnMut(usize, usize),
+    run: impl Fn(&[i64]) -> Result<T, E>,
+    round: impl Fn(usize, usize),
 ) -> Result<(T, usize), E> {
-    let mut run = |s_um: Option<f64>, tighten: f64, feet: f64| {
+    let run = |s_um: Option<f64>, tighten: f64, feet: f64| {
         run(&input.tolerances_with_feet(bound, s_um, tighten, feet))
     };
-    let Some(_) = bound.foot_slide_mm_s else {
-        let (best, attempts, _) = search_budget(bound, bound, |s, t| run(s, t, 1.0), &mut round)?;
-        return Ok((best, attempts));
-    };
-    // A slide bound: first the budget under the other bounds, then, if the
-    // feet slide too much there, the channels that move them tightened
-    // alone (a log-bisection of their factor); only if that fails, the
-    // whole budget under every bound.
-    let others = Bound {
-        foot_slide_mm_s: None,
-        ..*bound
-    };
-    let (first, mut attempts, (s_um, tighten)) =
-        search_budget(&others, bound, |s, t| run(s, t, 1.0), &mut round)?;
-    if bound.holds(first.metrics()) {
-        return Ok((first, attempts));
-    }
-    let range = (1.0 / 256.0, 1.0);
-    let rounds = attempts + bisect_rounds(range, 10, 1.05);
-    let (feet, _, n) = bisect(
+    search_with_slide(
         bound,
-        range,
-        10,
-        1.05,
-        |f| run(s_um, tighten, f),
-        |n| round(attempts + n, rounds),
-    )?;
-    attempts += n;
-    if let Some(best) = feet {
-        return Ok((best, attempts));
-    }
-    let (best, n, _) = search_budget(bound, bound, |s, t| run(s, t, 1.0), &mut round)?;
-    Ok((best, attempts + n))
+        |b| search_budget(b, bound, |s, t| run(s, t, 1.0), &round),
+        |(s_um, tighten), f| run(s_um, tighten, f),
+        &round,
+    )
 }
 
 /// What [`search_budget`] found: the attempt, the attempts made, and the
@@ -434,8 +426,8 @@ type Budgeted<T> = (T, usize, (Option<f64>, f64));
 fn search_budget<T: Trial, E: From<EncodeError>>(
     bound: &Bound,
     named: &Bound,
-    mut run: impl FnMut(Option<f64>, f64) -> Result<T, E>,
-    round: &mut impl FnMut(usize, usize),
+    run: impl Fn(Option<f64>, f64) -> Result<T, E>,
+    round: impl Fn(usize, usize),
 ) -> Result<Budgeted<T>, E> {
     let mut attempts = 0;
     let mut tighten = 1.0;

@@ -262,11 +262,7 @@ fn clip_header_bytes(clip: &[u8]) -> usize {
 
 /// Frames in the repeated clips of an `rma` clip (`None` for other codecs).
 fn repeated_frames(clip: &[u8]) -> Option<usize> {
-    let c = mocap_decoder::Clip::parse(clip).ok()?;
-    let section = c
-        .sections()
-        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)?;
-    Some(mocap_encoder::codec::rma::section::inspect(section.bytes)?.repeated_frames)
+    Some(mocap_encoder::codec::rma::section::inspect_clip(clip)?.repeated_frames)
 }
 
 /// The parts of a row every method fills the same way.

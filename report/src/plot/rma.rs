@@ -197,11 +197,7 @@ fn draw_kept<DB: DrawingBackend>(
             red.stroke_width(3),
         ))?;
         let colour = PALETTE[i % PALETTE.len()];
-        let (lo, hi) = along
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, r)| {
-                (lo.min(r), hi.max(r))
-            });
+        let (lo, hi) = (f64::from(c.primary.0), f64::from(c.primary.1));
         let span = |a: f64, b: f64, fill: RGBColor| {
             Rectangle::new(
                 [(tx(a), strip), (tx(b + 1.0).max(tx(a) + 1), strip + 40)],

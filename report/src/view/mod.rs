@@ -280,9 +280,10 @@ pub fn page_with_missing(
         return Err(ViewError::NoFrames { name: name() });
     }
     let mpu = unit.metres();
-    let a = metrics::positions_mm(original, mpu);
+    let source = metrics::Source::of(original, mpu);
+    let a = &source.positions;
     let b = decoded.map(|(d, _)| metrics::positions_mm(d, mpu));
-    let packed = pack::pack_positions(&a, b.as_deref(), joints)
+    let packed = pack::pack_positions(a, b.as_deref(), joints)
         .ok_or_else(|| ViewError::TooFar { name: name() })?;
     let errors: Option<Vec<f64>> = b.as_ref().map(|b| {
         a.iter()
@@ -291,8 +292,9 @@ pub fn page_with_missing(
             .collect()
     });
     let packed_errors = errors.as_deref().map(pack::pack_errors);
-    let metrics = decoded
-        .map(|(d, bytes)| metrics::compare(original, d, mpu, Some(&a), bytes, names.source_bytes));
+    let metrics = decoded.map(|(d, bytes)| {
+        metrics::compare(original, d, mpu, Some(&source), bytes, names.source_bytes)
+    });
     let data = PageData {
         format: 1,
         source: names.source,

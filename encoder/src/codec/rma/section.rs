@@ -278,6 +278,16 @@ pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
     Some(info)
 }
 
+/// The figures of a clip's `rma` section (the clip's bytes); `None` for a
+/// clip of another codec or one that does not parse.
+pub fn inspect_clip(clip: &[u8]) -> Option<SectionInfo> {
+    let clip = mocap_decoder::Clip::parse(clip).ok()?;
+    let section = clip
+        .sections()
+        .find(|s| s.id == mocap_decoder::consts::SECTION_CODEC_RMA)?;
+    inspect(section.bytes)
+}
+
 /// Sorted channel indices as runs (first, length).
 pub fn runs(channels: &[usize]) -> Vec<(u32, u32)> {
     let mut out: Vec<(u32, u32)> = Vec::new();
