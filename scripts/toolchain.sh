@@ -96,6 +96,23 @@ _mocap_pkg_installed() {
     [ "$(dpkg-query -W -f='${Status}' "$1" 2>/dev/null)" = "install ok installed" ]
 }
 
+# _mocap_unlisted_installed PKG...: for each installed package of the families of PKG (the
+# name up to its first '-': qemu-system-arm → qemu-*) whose installed version no configured
+# source offers, `name=version` with the highest version a source offers (nothing if none does).
+_mocap_unlisted_installed() {
+    local fams=() p name have best
+    for p in "$@"; do fams+=("${p%%-*}"); done
+    dpkg-query -W -f='${Package} ${Status}\n' 2>/dev/null \
+        | awk '$NF == "installed" { print $1 }' \
+        | while read -r name; do
+            printf '%s\n' "${fams[@]}" | grep -qx -- "${name%%-*}" || continue
+            have="$(dpkg-query -W -f='${Version}' "$name" 2>/dev/null)"
+            apt-cache madison "$name" 2>/dev/null | awk -F' [|] ' -v v="$have" '$2 == v { f = 1 } END { exit !f }' && continue
+            best="$(apt-cache madison "$name" 2>/dev/null | awk -F' [|] ' 'NR == 1 { print $2 }')"
+            [ -n "$best" ] && printf '%s=%s\n' "$name" "$best"
+        done
+}
+
 # mocap_ensure_packages PKG... : install the Debian packages that are missing.
 mocap_ensure_packages() {
     local missing=() p
@@ -133,8 +150,19 @@ mocap_ensure_packages() {
         apt_opts=(-y -q -o Dpkg::Use-Pty=0 -o DPkg::Lock::Timeout=600)
         "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get -q -o DPkg::Lock::Timeout=600 update \
             >>"$MOCAP_TOOLCHAIN_LOG" 2>&1 || exit 1
-        "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install "${apt_opts[@]}" "${still[@]}" \
-            >>"$MOCAP_TOOLCHAIN_LOG" 2>&1 || exit 1
+        if ! "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install "${apt_opts[@]}" "${still[@]}" \
+            >>"$MOCAP_TOOLCHAIN_LOG" 2>&1; then
+            # A machine may carry a package of the same family from a source it no longer
+            # lists (seen: qemu-utils from bookworm-backports, which Breaks the archive's
+            # qemu-system-common): once more with those taken to the archive's version.
+            pins=()
+            while read -r pin; do pins+=("$pin"); done < <(_mocap_unlisted_installed "${still[@]}")
+            [ "${#pins[@]}" -gt 0 ] || exit 1
+            _mocap_log "retrying with the archive's versions of: ${pins[*]}"
+            printf 'toolchain: retrying with the archive'"'"'s versions of %s\n' "${pins[*]}" >&2
+            "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install "${apt_opts[@]}" --allow-downgrades \
+                "${still[@]}" "${pins[@]}" >>"$MOCAP_TOOLCHAIN_LOG" 2>&1 || exit 1
+        fi
     ) || rc=$?
     if [ "$rc" -ne 0 ]; then
         _mocap_err "apt-get install ${missing[*]} failed; last lines of $MOCAP_TOOLCHAIN_LOG:"
