@@ -389,17 +389,22 @@ impl ShowSpec {
                 .parse()
                 .map_err(|e: crate::encode::BoundError| at(show_span.clone(), e.to_string()))?]),
         )?;
-        if rig.is_some() && default_bound.positional() {
-            let span = show
-                .max_error
-                .as_ref()
-                .map_or(show_span.clone(), |b| b.span());
-            return Err(at(
-                span,
-                "a servo show's bound is in degrees of servo travel (e.g. max_error = \"0.5deg\")"
-                    .into(),
-            ));
-        }
+        // A servo show's clips are servo angles: no joints to measure in
+        // millimetres, no feet to keep from sliding.
+        let servo_bound = |bound: &Bound,
+                           given: &Option<Spanned<String>>,
+                           fallback: &Range<usize>| {
+            if rig.is_some() && (bound.positional() || bound.foot_slide_mm_s.is_some()) {
+                let span = given.as_ref().map_or(fallback.clone(), |b| b.span());
+                return Err(at(
+                    span,
+                    "a servo show's bound is in degrees of servo travel (e.g. max_error = \"0.5deg\")"
+                        .into(),
+                ));
+            }
+            Ok(())
+        };
+        servo_bound(&default_bound, &show.max_error, &show_span)?;
         let default_units = units_of(&show.units, None)?;
         let mark_at = |m: &RawMark, span: Range<usize>| -> Result<Mark, LocatedError> {
             match m {
@@ -479,7 +484,11 @@ impl ShowSpec {
                 to: c.to.as_ref().map(mark).transpose()?,
                 looping,
                 codec: codec_of(&c.codec, default_codec)?,
-                bound: bound_of(&c.max_error, default_bound)?,
+                bound: {
+                    let bound = bound_of(&c.max_error, default_bound)?;
+                    servo_bound(&bound, &c.max_error, &span)?;
+                    bound
+                },
                 units: units_of(&c.units, default_units)?,
                 at: pos(span),
             });
@@ -691,7 +700,35 @@ impl ShowSpec {
 
 #[cfg(test)]
 mod tests {
-    use super::expand_with;
+    use super::{expand_with, ShowSpec};
+
+    /// A servo show's bound is in degrees of servo travel, in `[show]` and
+    /// in every clip: millimetres and a foot-slide bound are refused where
+    /// they are written.
+    #[test]
+    fn a_servo_show_refuses_joint_and_slide_bounds_at_their_line() {
+        let dir = std::path::Path::new(".");
+        let show = |show_bound: &str, clip_bound: &str| {
+            format!(
+                "[show]\nname = \"s\"\nrig = \"r.toml\"\nmax_error = \"{show_bound}\"\n\n\
+                 [[clip]]\nname = \"a\"\nfile = \"a.bvh\"\nmax_error = \"{clip_bound}\"\n"
+            )
+        };
+        assert!(ShowSpec::parse(&show("0.5deg", "1deg"), "s.toml", dir).is_ok());
+        for (show_bound, clip_bound, line) in [
+            ("20mm", "1deg", 4),
+            ("0.5deg", "0.5deg+slide:100mm/s", 9),
+            ("0.5deg", "arms:10mm", 9),
+        ] {
+            let err = ShowSpec::parse(&show(show_bound, clip_bound), "s.toml", dir)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.contains("degrees of servo travel") && err.contains(&format!("s.toml:{line}:")),
+                "{show_bound} / {clip_bound}: {err}"
+            );
+        }
+    }
 
     #[test]
     fn a_relative_variable_is_read_from_the_working_directory() {
