@@ -8,19 +8,21 @@
 #  1. encodes two sets of clips from the corpus ($MOCAP_CORPUS, default ../shared/data) and
 #     assets/ into target/cost/clips: the calibration set (the fit) and the validation set (held
 #     out: files the fit never sees), every codec (and `index` in its fast layout, named
-#     index-fast) at two bounds each;
+#     index-fast) at two bounds each; and, for `rma`'s repeated clips, takes played on
+#     (`mocap generate long`, so that they repeat) as `rma` clips at two bounds;
 #  2. runs every clip in QEMU with -icount shift=0 (scripts/firmware.sh run --icount) on each
 #     board of --boards (fit and checked) and of --check-boards (checked only: a core the model
 #     predicts from another core's fit, the M4F from the M3's), rows into target/cost/measured.tsv;
-#     then every pca-spline clip again with the smallest, the middle and the largest Player<N>
-#     worth building for it (--player-words N, a seventh column: none, some, every group cached);
+#     then every pca-spline and rma clip again with the smallest, the middle and the largest
+#     Player<N> worth building for it (--player-words N, a seventh column: none, some, every
+#     group cached);
 #  3. `mocap target fit target/cost/measured.tsv` fits the model per core and codec on the
 #     calibration rows and prints predicted against measured for every row, and the worst error
 #     per set; with --write it rewrites encoder/src/target/calibration.rs (the coefficients the
 #     encoder ships) and BENCHMARKS.md's block between `<!-- bench:cost -->` markers.
 # Clips the example firmware's player cannot hold (a predictive clip needs 3 words of state per
 # channel; the firmware has 320) are reported and not measured.
-# Takes about 30 minutes on 2 cores (some 350 firmware builds and runs of ~5 s each).
+# Takes about 45 minutes on 2 cores (some 350 firmware builds and runs of ~5 s each).
 set -euo pipefail
 # shellcheck source=scripts/toolchain.sh
 source "$(dirname "${BASH_SOURCE[0]}")/toolchain.sh"
@@ -70,13 +72,25 @@ sources=(
     "check 16_15 $corpus/asf-amc/16_15.amc"
     "check 01_Eb015pi $corpus/c3d/01_Eb015pi.c3d"
 )
+# set name input frames: a take played on to `frames` frames (its first frame dropped: CMU's
+# reference pose), coded with `rma` only: its later playings are repeated clips.
+repeating=(
+    "fit demo2 assets/animatronic_demo.bvh 960"
+    "fit 35_17x $corpus/cmu/35_17.bvh 600"
+    "fit 09_01x $corpus/cmu/09_01.bvh 500"
+    "fit 16_07x $corpus/cmu/16_07.bvh 1200"
+    "fit 007_03x $corpus/iclone-cmu/007_03.bvh 600"
+    "check 35_01x $corpus/cmu/35_01.bvh 1000"
+    "check 06_05x $corpus/cmu/06_05.bvh 1000"
+    "check 01_14x $corpus/cmu-long/01_14.bvh 4000"
+)
 
 # bounds INPUT CODEC: the codec's two bounds (marker clips take lengths only).
 bounds() {
     case "$1:$2" in
         *.c3d:*) echo "5mm 50mm+arms:10mm" ;;
         *:index|*:index-fast) echo "1deg 20mm" ;;
-        *:pca-spline) echo "50mm+arms:10mm 20mm" ;;
+        *:pca-spline|*:rma) echo "50mm+arms:10mm 20mm" ;;
         *:predictive) echo "1deg 0.25deg" ;;
     esac
 }
@@ -85,10 +99,20 @@ bounds() {
 encode_clips() {
     echo "cost.sh: encoding the clips into $out/clips" >&2
     clips=()
-    local s set name input codec b tag clip
+    local s set name input codec b tag clip frames
+    mkdir -p "$out/inputs"
+    for s in "${repeating[@]}"; do
+        read -r set name input frames <<<"$s"
+        local long="$out/inputs/$name.bvh"
+        if [ ! -s "$long" ] || [ "$input" -nt "$long" ]; then
+            "$mocap" generate long --from "$input" --skip 1 --frames "$frames" -o "$long" >/dev/null 2>>"$out/encode.log" \
+                || { echo "cost.sh: playing $input on to $frames frames failed; see $out/encode.log" >&2; exit 1; }
+        fi
+        sources+=("$set $name $long rma")
+    done
     for s in "${sources[@]}"; do
-        read -r set name input <<<"$s"
-        for codec in index pca-spline predictive index-fast; do
+        read -r set name input codecs <<<"$s"
+        for codec in ${codecs:-index pca-spline predictive index-fast rma}; do
             local args=(--codec "$codec")
             [ "$codec" = index-fast ] && args=(--codec index --index-layout fast)
             for b in $(bounds "$input" "$codec"); do
@@ -119,7 +143,7 @@ measure_board() {
     for c in "${clips[@]}"; do
         read -r set clip <<<"$c"
         [ -n "$only_check" ] && [ "$set" = fit ] && continue
-        if [ -n "$resume" ] && awk -F'\t' -v b="$board" -v c="$clip" '$1 == b && $4 == c && NF == 6 || $1 == b && $4 == c && $0 !~ /_pca-spline_/ { f = 1 } END { exit !f }' "$tsv"; then
+        if [ -n "$resume" ] && awk -F'\t' -v b="$board" -v c="$clip" '$1 == b && $4 == c && NF == 6 || $1 == b && $4 == c && $0 !~ /_(pca-spline|rma)_/ { f = 1 } END { exit !f }' "$tsv"; then
             continue
         fi
         words=""
@@ -165,7 +189,7 @@ measure_player() {
     printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$core" "$set" "$clip" "$(figures "$log")" "$words" >>"$tsv"
 }
 
-# measure_capacity BOARD ONLY_CHECK: every pca-spline clip again with other players
+# measure_capacity BOARD ONLY_CHECK: every pca-spline and rma clip again with other players
 # (`mocap target cost --capacities`): the smallest Player<N> (no group cached), the middle one
 # and the one that caches every group, each that is not the firmware's default 320 words and
 # is at most 2 000 words (measure_player: where the board's RAM holds it).
@@ -175,7 +199,7 @@ measure_capacity() {
     for c in "${clips[@]}"; do
         read -r set clip <<<"$c"
         [ -n "$only_check" ] && [ "$set" = fit ] && continue
-        case "$clip" in *_pca-spline_*) ;; *) continue ;; esac
+        case "$clip" in *_pca-spline_* | *_rma_*) ;; *) continue ;; esac
         mapfile -t all < <("$mocap" target cost "$clip" --target "$board" --capacities | awk -v b="$board" '$1 == b { print $6 }')
         [ "${#all[@]}" -gt 0 ] || continue
         for words in $(printf '%s\n' "${all[0]}" "${all[$((${#all[@]} / 2))]}" "${all[$((${#all[@]} - 1))]}" | sort -un); do
@@ -184,7 +208,7 @@ measure_capacity() {
             n=$((n + 1))
         done
     done
-    echo "cost.sh: $board ($core): $n pca-spline runs with other players" >&2
+    echo "cost.sh: $board ($core): $n pca-spline and rma runs with other players" >&2
 }
 
 # capacity_limit BOARD: the largest Player<N> the example firmware runs with on BOARD (its

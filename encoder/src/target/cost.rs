@@ -10,7 +10,7 @@ use mocap_decoder::{consts, Clip};
 
 use super::calibration;
 use super::chips::{Chip, Core};
-use crate::codec::{index, pca_spline, predictive};
+use crate::codec::{index, pca_spline, predictive, rma};
 
 /// The codec a clip is coded with, as the cost model sees it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -20,14 +20,21 @@ pub enum CodecKind {
     Predictive,
     /// `index` in its fast layout (SPEC.md §4.6, section `0x13`).
     IndexFast,
+    /// `rma` (SPEC.md §12): a `pca-spline` body evaluated at `t`, and again
+    /// at `Ref(t)` in a repeated clip.
+    Rma,
 }
 
+/// The `pca-spline` features (the first ten of `rma`'s: its body's).
+const PCA_FEATURES: usize = 10;
+
 impl CodecKind {
-    pub const ALL: [CodecKind; 4] = [
+    pub const ALL: [CodecKind; 5] = [
         CodecKind::Index,
         CodecKind::PcaSpline,
         CodecKind::Predictive,
         CodecKind::IndexFast,
+        CodecKind::Rma,
     ];
 
     pub fn name(self) -> &'static str {
@@ -36,8 +43,28 @@ impl CodecKind {
             CodecKind::PcaSpline => "pca-spline",
             CodecKind::Predictive => "predictive",
             CodecKind::IndexFast => "index-fast",
+            CodecKind::Rma => "rma",
         }
     }
+
+    /// `rma`'s features: its body's evaluations at `t` and at `Ref(t)` as
+    /// `pca-spline`'s (weighted by the poses that make each), then what a
+    /// repeated pose adds.
+    const RMA_FEATURES: [&'static str; PCA_FEATURES + 3] = [
+        "1",
+        "channels",
+        "cached: sum of k",
+        "cached: groups",
+        "uncached: sum of channels x k",
+        "uncached: groups",
+        "uncached: sum of k",
+        "constants not cached (zigzag varints read per pose)",
+        "key intervals entered x k per pose",
+        "cached, k > 8: sum of channels x k",
+        "repeated poses",
+        "repeated poses x added channels",
+        "repeated poses whose scratch is laid over t's cache",
+    ];
 
     /// What each entry of [`Features::x`] is, for the fit's report.
     pub fn feature_names(self) -> &'static [&'static str] {
@@ -51,18 +78,8 @@ impl CodecKind {
                 "key groups / key interval",
                 "payload bits per pose / 32",
             ],
-            CodecKind::PcaSpline => &[
-                "1",
-                "channels",
-                "cached: sum of k",
-                "cached: groups",
-                "uncached: sum of channels x k",
-                "uncached: groups",
-                "uncached: sum of k",
-                "constants not cached (zigzag varints read per pose)",
-                "key intervals entered x k per pose",
-                "cached, k > 8: sum of channels x k",
-            ],
+            CodecKind::PcaSpline => &Self::RMA_FEATURES[..PCA_FEATURES],
+            CodecKind::Rma => &Self::RMA_FEATURES,
             CodecKind::IndexFast => &[
                 "1",
                 "channels",
@@ -196,6 +213,27 @@ impl Features {
                     out.x = pca_features(&s, channels, f, words);
                     return Ok(out);
                 }
+                consts::SECTION_CODEC_RMA => {
+                    let s = rma::section::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
+                    let body = pca_cache_words(&s.body);
+                    let least = RMA_CURSOR_WORDS + channels;
+                    // Every group cached at `t` (and at `Ref(t)` beside the
+                    // scratch pose if the clip repeats).
+                    let need = if s.clips.is_empty() {
+                        RMA_CURSOR_WORDS + body.max(channels)
+                    } else {
+                        least + 2 * body
+                    };
+                    let words = capacity.unwrap_or(need);
+                    out.state_words = words;
+                    out.capacities = pca_capacities(&s.body, 0, need - least)
+                        .into_iter()
+                        .map(|w| w + least)
+                        .collect();
+                    out.codec = CodecKind::Rma;
+                    out.x = rma_features(&s, channels, f, words);
+                    return Ok(out);
+                }
                 consts::SECTION_CODEC_PREDICTIVE => {
                     let s = predictive::inspect(sec.bytes).ok_or(FeatureError::NoCodec)?;
                     out.codec = CodecKind::Predictive;
@@ -309,6 +347,22 @@ fn pca_features(
     frames: f64,
     words: usize,
 ) -> Vec<f64> {
+    pca_features_weighted(s, channels, words, |start, end| {
+        f64::from(end.saturating_sub(start) + 1) / frames
+    })
+}
+
+/// [`pca_features`] of evaluations made on each segment `(start, end)`
+/// `weight(start, end)` times per pose (`pca-spline`: its share of the
+/// frames; `rma`'s evaluations at `Ref(t)`: the share of the poses whose
+/// reference falls there).
+fn pca_features_weighted(
+    s: &pca_spline::SectionInfo,
+    channels: usize,
+    words: usize,
+    weight: impl Fn(u32, u32) -> f64,
+) -> Vec<f64> {
+    let mut evaluations = 0.0;
     let (mut cached_k, mut uncached_nk, mut uncached_groups, mut entered) = (0.0, 0.0, 0.0, 0.0);
     let (mut cached_groups, mut uncached_k) = (0.0, 0.0);
     // The constants are cached after the slots if they fit there, else
@@ -318,7 +372,9 @@ fn pca_features(
     // take its generic one, slower per channel and component.
     let mut generic_nk = 0.0;
     for (start, end, per) in &s.segments {
-        let w = f64::from(end.saturating_sub(*start) + 1) / frames;
+        let w = weight(*start, *end);
+        evaluations += w;
+        let length = f64::from(end.saturating_sub(*start) + 1);
         let mut free = words.saturating_sub(CACHE_HEAD);
         let mut fits = true;
         for (&n, &(k, m)) in s.group_channels.iter().zip(per) {
@@ -339,15 +395,15 @@ fn pca_features(
                 uncached_groups += w;
                 uncached_k += w * k as f64;
             }
-            entered += (m * k) as f64 / frames;
+            entered += w * (m * k) as f64 / length;
         }
         if s.consts > free {
             uncached_consts += w * s.consts as f64;
         }
     }
     vec![
-        1.0,
-        channels as f64,
+        evaluations,
+        evaluations * channels as f64,
         cached_k,
         cached_groups,
         uncached_nk,
@@ -357,6 +413,70 @@ fn pca_features(
         entered,
         generic_nk,
     ]
+}
+
+/// Words of the player's state `rma` keeps before its scratch pose.
+const RMA_CURSOR_WORDS: usize = mocap_decoder::rma::CURSOR_WORDS;
+
+/// The `rma` features with `words` words of state, the words split as the
+/// decoder splits them (`RmaCodec::decode_at`): the cursor, then with room
+/// for the scratch pose and `t`'s whole cache both, those and the rest for
+/// `Ref(t)`; without, in a clip at most a quarter repeated, `t`'s cache
+/// first with the scratch laid over it (refilled after a repeated pose);
+/// without repeated clips, every word for `t`.
+fn rma_features(
+    s: &rma::section::SectionInfo,
+    channels: usize,
+    frames: f64,
+    words: usize,
+) -> Vec<f64> {
+    let body = &s.body;
+    let len = words.saturating_sub(RMA_CURSOR_WORDS);
+    if s.clips.is_empty() {
+        let mut x = pca_features(body, channels, frames, len);
+        x.extend([0.0; 3]);
+        return x;
+    }
+    let t_cache = pca_cache_words(body);
+    let overlay = s.repeated_frames as f64 * 4.0 <= frames && len < channels + t_cache;
+    let (t_words, ref_words) = if overlay {
+        let t = t_cache.min(len);
+        (t, len.saturating_sub(t.max(channels)))
+    } else {
+        let t = t_cache.min(len.saturating_sub(channels));
+        (t, len.saturating_sub(channels + t))
+    };
+    let mut x = pca_features(body, channels, frames, t_words);
+    // Where the references fall: poses per segment (its primary frames).
+    let starts: Vec<u32> = body.segments.iter().map(|(a, _, _)| *a).collect();
+    let mut at_ref = vec![0.0; starts.len()];
+    for c in &s.clips {
+        for t in 0..=c.last.saturating_sub(c.start) {
+            let r = c.reference_at(t).max(0.0) as u32;
+            let seg = starts.partition_point(|&a| a <= r).saturating_sub(1);
+            if let Some(n) = at_ref.get_mut(seg) {
+                *n += 1.0 / frames;
+            }
+        }
+    }
+    let by_start = |start: u32| {
+        starts
+            .binary_search(&start)
+            .ok()
+            .and_then(|i| at_ref.get(i).copied())
+            .unwrap_or(0.0)
+    };
+    let at_ref_x = pca_features_weighted(body, channels, ref_words, |start, _| by_start(start));
+    for (x, r) in x.iter_mut().zip(&at_ref_x) {
+        *x += r;
+    }
+    let repeated = s.repeated_frames as f64 / frames;
+    x.extend([
+        repeated,
+        repeated * s.added as f64,
+        if overlay { repeated } else { 0.0 },
+    ]);
+    x
 }
 
 /// A core's figures for one codec (generated into [`calibration`]).
@@ -380,13 +500,21 @@ pub fn playback_stack_bytes(core: Core, codec: CodecKind) -> Option<usize> {
 /// The model of `codec` on `core`, and the core it was fitted on (a core
 /// without measurements borrows the nearest one's: the M4F the M3's).
 pub fn model(core: Core, codec: CodecKind) -> Option<(&'static Model, Core)> {
-    let find = |c: Core| {
-        calibration::MODELS
-            .iter()
-            .find(|m| m.core == c && m.codec == codec)
+    let fitted = |codec: CodecKind| {
+        let find = |c: Core| {
+            calibration::MODELS
+                .iter()
+                .find(|m| m.core == c && m.codec == codec)
+        };
+        find(core).map(|m| (m, core)).or_else(|| match core {
+            Core::M4F => find(Core::M3).map(|m| (m, Core::M3)),
+            _ => None,
+        })
     };
-    find(core).map(|m| (m, core)).or_else(|| match core {
-        Core::M4F => find(Core::M3).map(|m| (m, Core::M3)),
+    // Before `rma` rows are measured, its body's evaluations alone, read by
+    // `pca-spline`'s model (its first features are `pca-spline`'s).
+    fitted(codec).or_else(|| match codec {
+        CodecKind::Rma => fitted(CodecKind::PcaSpline),
         _ => None,
     })
 }

@@ -36,6 +36,8 @@ pub enum FitError {
     },
     #[error("{0}: {1}")]
     Io(PathBuf, std::io::Error),
+    #[error("{core} rma: no pca-spline calibration rows to take its body's coefficients from")]
+    NoBody { core: Core },
     #[error(
         "{core} {codec}: {rows} calibration rows for {params} coefficients: measure more clips"
     )]
@@ -120,7 +122,11 @@ pub struct Fitted {
 
 /// Least squares of the relative error (each row divided by its measured
 /// count, so a 300-instruction clip weighs as much as a 30 000 one), per
-/// core and codec, on the calibration rows.
+/// core and codec, on the calibration rows. `rma` takes the same core's
+/// `pca-spline` coefficients for its body's evaluations (its first
+/// features) and fits only what its repeated poses add, on what those
+/// leave (few calibration clips repeat, and their bodies are `pca-spline`
+/// bodies).
 pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
     let mut groups: BTreeMap<(Core, CodecKind), Vec<&Measurement>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.fit) {
@@ -129,9 +135,41 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
             .or_default()
             .push(r);
     }
-    let mut out = Vec::new();
+    let mut out: Vec<Fitted> = Vec::new();
     for ((core, codec), g) in groups {
         let params = codec.feature_names().len();
+        if codec == CodecKind::Rma {
+            let body = out
+                .iter()
+                .find(|f| f.core == core && f.codec == CodecKind::PcaSpline)
+                .map(|f| f.coefficients.clone())
+                .ok_or(FitError::NoBody { core })?;
+            let own = params - body.len();
+            if g.len() < own + 2 {
+                return Err(FitError::TooFew {
+                    core,
+                    codec,
+                    rows: g.len(),
+                    params: own,
+                });
+            }
+            let a = DMatrix::from_fn(g.len(), own, |i, j| {
+                g[i].features.x.get(body.len() + j).copied().unwrap_or(0.0)
+                    / g[i].decode_per_pose.max(1.0)
+            });
+            let b = DVector::from_fn(g.len(), |i, _| {
+                1.0 - instructions(&body, &g[i].features.x[..body.len()])
+                    / g[i].decode_per_pose.max(1.0)
+            });
+            let mut coefficients = body;
+            coefficients.extend(nonnegative_solve(&a, &b, None));
+            out.push(Fitted {
+                core,
+                codec,
+                coefficients,
+            });
+            continue;
+        }
         if g.len() < params + 2 {
             return Err(FitError::TooFew {
                 core,
@@ -143,10 +181,11 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
         let a = DMatrix::from_fn(g.len(), params, |i, j| {
             g[i].features.x.get(j).copied().unwrap_or(0.0) / g[i].decode_per_pose.max(1.0)
         });
+        let ones = DVector::from_element(g.len(), 1.0);
         let coefficients = if matches!(codec, CodecKind::PcaSpline | CodecKind::IndexFast) {
-            nonnegative_solve(&a)
+            nonnegative_solve(&a, &ones, Some(0))
         } else {
-            solve(&a, &vec![true; params])
+            solve(&a, &ones, &vec![true; params])
         };
         out.push(Fitted {
             core,
@@ -157,13 +196,12 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
     Ok(out)
 }
 
-/// Least squares of `a · c = 1` over the columns `used` (the others 0).
-fn solve(a: &DMatrix<f64>, used: &[bool]) -> Vec<f64> {
+/// Least squares of `a · c = b` over the columns `used` (the others 0).
+fn solve(a: &DMatrix<f64>, b: &DVector<f64>, used: &[bool]) -> Vec<f64> {
     let cols: Vec<usize> = (0..a.ncols()).filter(|&j| used[j]).collect();
     let sub = DMatrix::from_fn(a.nrows(), cols.len(), |i, j| a[(i, cols[j])]);
-    let b = DVector::from_element(a.nrows(), 1.0);
     let mut c = vec![0.0; a.ncols()];
-    if let Ok(x) = sub.svd(true, true).solve(&b, 1e-9) {
+    if let Ok(x) = sub.svd(true, true).solve(b, 1e-9) {
         for (&j, v) in cols.iter().zip(x.iter()) {
             c[j] = *v;
         }
@@ -171,18 +209,18 @@ fn solve(a: &DMatrix<f64>, used: &[bool]) -> Vec<f64> {
     c
 }
 
-/// [`solve`] with every coefficient but the constant's (column 0) at least
-/// 0: each is an instruction count per unit of work, and a negative one is
+/// [`solve`] with every coefficient but the constant's (column `free`, if
+/// any) at least 0: each is an instruction count per unit of work, and a negative one is
 /// the fit trading features it cannot tell apart on the calibration clips,
 /// which extrapolates badly (the M0's full-cache `pca-spline` players, past
 /// the microbit's RAM). The most negative is dropped and the rest refitted
 /// until none is left (an active-set descent, as Lawson–Hanson's NNLS).
-fn nonnegative_solve(a: &DMatrix<f64>) -> Vec<f64> {
+fn nonnegative_solve(a: &DMatrix<f64>, b: &DVector<f64>, free: Option<usize>) -> Vec<f64> {
     let mut used = vec![true; a.ncols()];
     loop {
-        let c = solve(a, &used);
-        let worst = (1..c.len())
-            .filter(|&j| used[j] && c[j] < 0.0)
+        let c = solve(a, b, &used);
+        let worst = (0..c.len())
+            .filter(|&j| Some(j) != free && used[j] && c[j] < 0.0)
             .min_by(|&i, &j| c[i].total_cmp(&c[j]));
         match worst {
             Some(j) => used[j] = false,

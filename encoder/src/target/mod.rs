@@ -16,10 +16,11 @@ use crate::encode::CodecChoice;
 
 /// The codecs `--codec auto --target` tries: those the cost model knows
 /// (`scripts/cost.sh` has no `pattern` rows yet).
-pub const CANDIDATE_CODECS: [CodecChoice; 3] = [
+pub const CANDIDATE_CODECS: [CodecChoice; 4] = [
     CodecChoice::Index,
     CodecChoice::PcaSpline,
     CodecChoice::Predictive,
+    CodecChoice::Rma,
 ];
 pub use chips::{chip, chip_names, Chip, Core, CHIPS};
 pub use choose::{best_capacity, candidate_label, choose, Candidate};
