@@ -184,3 +184,73 @@ fn predicted_cost_follows_the_players_capacity() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `rma` (calibrated on other takes played on, `scripts/cost.sh`): 35_01 played on to 1 000
+/// frames at 20 mm, a third of its poses in repeated clips, on the M0 and the M3 with the
+/// firmware's player, and on the M3 with one that caches every group at `t` and at `Ref(t)`:
+/// predicted within ±15 % of the measured. (Without repeated clips `rma` is its `pca-spline`
+/// body, whose model the test above holds.)
+#[test]
+fn predicted_rma_cost_is_within_15_percent_with_repeated_clips() {
+    if !qemu_available() {
+        return;
+    }
+    let Some(path) = corpus_file("cmu", "35_01.bvh") else {
+        skipped("corpus not found (set MOCAP_CORPUS)");
+        return;
+    };
+    let take = bvh::read_file(&path).unwrap();
+    let m = mocap_encoder::generate::long_take(
+        &take,
+        &mocap_encoder::generate::LongOptions {
+            skip: 1,
+            ..mocap_encoder::generate::LongOptions::new(1000)
+        },
+    )
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("mocap-qemu-rma-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for bound in ["20mm"] {
+        let bytes = encode_with(&m, CodecChoice::Rma, IndexLayout::Compact, bound);
+        let clip = dir.join(format!("35_01x_rma_{}.mcb", bound.replace([':', '+'], "_")));
+        std::fs::write(&clip, &bytes).unwrap();
+        let full = target::Features::of(&bytes).unwrap();
+        assert!(full.x[10] > 0.2, "{bound}: repeated poses {:?}", full.x);
+        for board in ["microbit", "lm3s6965"] {
+            let chip = target::chip(board).unwrap();
+            // The firmware's player, and one with every group cached where the board holds it.
+            let mut players = vec![None];
+            if board == "lm3s6965" {
+                players.push(Some(full.state_words));
+            }
+            for n in players {
+                let f = target::Features::with_capacity(&bytes, n.or(Some(320))).unwrap();
+                let predicted = cost::predict_features(&f, chip).unwrap();
+                let words = n.map(|n| n.to_string());
+                let mut args = vec!["--icount"];
+                if let Some(w) = &words {
+                    args.extend(["--player-words", w]);
+                }
+                let uart = run_firmware(board, &clip, &args);
+                let measured = stat_on(&uart, "# decode_instructions_total=", "per_frame") as f64;
+                let err = (predicted.instructions_per_pose - measured) / measured;
+                eprintln!(
+                    "{board} rma {bound} Player<{}>: {} B, repeated poses {:.0} %, measured {measured:.0}, predicted {:.0} ({:+.1} %)",
+                    f.state_words,
+                    bytes.len(),
+                    f.x[10] * 100.0,
+                    predicted.instructions_per_pose,
+                    err * 100.0
+                );
+                assert!(
+                    err.abs() <= 0.15,
+                    "{board} rma {bound} Player<{}>: predicted {:.0}, measured {measured:.0} ({:+.1} %)",
+                    f.state_words,
+                    predicted.instructions_per_pose,
+                    err * 100.0
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

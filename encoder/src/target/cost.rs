@@ -620,3 +620,81 @@ pub fn decoder_code_bytes(core: Core) -> Option<usize> {
         .find(|(c, _)| *c == core)
         .map(|&(_, b)| b)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn golden(name: &str) -> Vec<u8> {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/golden")
+            .join(name);
+        std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    }
+
+    /// The section of `id` in the clip `bytes`.
+    fn section(bytes: &[u8], id: u8) -> Vec<u8> {
+        let clip = Clip::parse(bytes).unwrap();
+        let s = clip.sections().find(|s| s.id == id).unwrap();
+        s.bytes.to_vec()
+    }
+
+    /// An `rma` clip without repeated clips is its body: `pca-spline`'s
+    /// features of the body with the player's words less the cursor, and
+    /// nothing for repeated poses.
+    #[test]
+    fn rma_without_repeats_is_its_body() {
+        let bytes = golden("rma_demo_20mm.mcb");
+        let s = rma::section::inspect(&section(&bytes, consts::SECTION_CODEC_RMA)).unwrap();
+        assert!(s.clips.is_empty());
+        let f = Features::of(&bytes).unwrap();
+        assert_eq!(f.codec, CodecKind::Rma);
+        assert_eq!(f.x.len(), CodecKind::Rma.feature_names().len());
+        let frames = f64::from(f.frames);
+        for words in f.capacities.iter().copied().chain([f.channels + 2, 700]) {
+            let x = Features::with_capacity(&bytes, Some(words)).unwrap().x;
+            let body = pca_features(&s.body, f.channels, frames, words - RMA_CURSOR_WORDS);
+            assert_eq!(x[..PCA_FEATURES], body[..], "{words} words");
+            assert_eq!(x[PCA_FEATURES..], [0.0; 3], "{words} words");
+        }
+    }
+
+    /// A repeated clip adds a body evaluation at `Ref(t)` per repeated
+    /// pose and the terms of repeated poses; more words never add work.
+    #[test]
+    fn rma_repeated_poses_evaluate_the_body_twice() {
+        let bytes = golden("rma_demo_twice_20mm.mcb");
+        let s = rma::section::inspect(&section(&bytes, consts::SECTION_CODEC_RMA)).unwrap();
+        let f = Features::of(&bytes).unwrap();
+        let share = s.repeated_frames as f64 / f64::from(f.frames);
+        assert_eq!(share, 0.5);
+        // Every group cached: one evaluation per pose, and one more per
+        // repeated pose; no scratch over `t`'s cache.
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-9 * b.abs().max(1.0);
+        assert!(near(f.x[0], 1.0 + share), "{:?}", f.x);
+        assert!(near(f.x[1], (1.0 + share) * f.channels as f64), "{:?}", f.x);
+        assert_eq!(f.x[PCA_FEATURES..], [share, share * s.added as f64, 0.0]);
+        assert_eq!(f.state_words, *f.capacities.last().unwrap());
+        assert_eq!(f.capacities[0], f.channels + RMA_CURSOR_WORDS);
+        let chip = super::super::chip("lm3s6965").unwrap();
+        let costs = super::super::predict_capacities(&bytes, chip).unwrap();
+        for w in costs.windows(2) {
+            assert!(w[0].state_words < w[1].state_words);
+            assert!(w[0].instructions_per_pose >= w[1].instructions_per_pose);
+        }
+        // Half the poses repeated: more than the body alone at the same player.
+        let body = instructions(
+            model(Core::M3, CodecKind::PcaSpline)
+                .unwrap()
+                .0
+                .coefficients,
+            &pca_features(
+                &s.body,
+                f.channels,
+                f64::from(f.frames),
+                f.state_words - RMA_CURSOR_WORDS,
+            ),
+        );
+        assert!(costs.last().unwrap().instructions_per_pose > 1.4 * body);
+    }
+}
