@@ -8,8 +8,9 @@
 #  1. encodes two sets of clips from the corpus ($MOCAP_CORPUS, default ../shared/data) and
 #     assets/ into target/cost/clips: the calibration set (the fit) and the validation set (held
 #     out: files the fit never sees), every codec (and `index` in its fast layout, named
-#     index-fast) at two bounds each; and, for `rma`'s repeated clips, takes played on
-#     (`mocap generate long`, so that they repeat) as `rma` clips at two bounds;
+#     index-fast) at two bounds each; and takes played on (`mocap generate long`, so that
+#     they repeat) as `rma` clips at two bounds (`rma`'s body is read by `pca-spline`'s model:
+#     its clips fit only what repeated poses add);
 #  2. runs every clip in QEMU with -icount shift=0 (scripts/firmware.sh run --icount) on each
 #     board of --boards (fit and checked) and of --check-boards (checked only: a core the model
 #     predicts from another core's fit, the M4F from the M3's), rows into target/cost/measured.tsv;
@@ -112,7 +113,7 @@ encode_clips() {
     done
     for s in "${sources[@]}"; do
         read -r set name input codecs <<<"$s"
-        for codec in ${codecs:-index pca-spline predictive index-fast rma}; do
+        for codec in ${codecs:-index pca-spline predictive index-fast}; do
             local args=(--codec "$codec")
             [ "$codec" = index-fast ] && args=(--codec index --index-layout fast)
             for b in $(bounds "$input" "$codec"); do
