@@ -4,6 +4,9 @@
 #   bash scripts/cost.sh [--boards "microbit lm3s6965 riscv-virt"] [--check-boards "mps2-an386"] [--write]
 #   bash scripts/cost.sh --fit-only [--write]   (step 3 alone, on the last run's measurements)
 #   bash scripts/cost.sh --resume [...]          (keeps measured.tsv's rows, measures the rest)
+#   bash scripts/cost.sh --only rma [--write]    (one codec's clips only: its model refitted, every
+#                                                 other model kept as shipped; the report goes to
+#                                                 BENCHMARKS.md's bench:cost-rma block)
 #
 #  1. encodes two sets of clips from the corpus ($MOCAP_CORPUS, default ../shared/data) and
 #     assets/ into target/cost/clips: the calibration set (the fit) and the validation set (held
@@ -35,6 +38,7 @@ check_boards="mps2-an386"
 write=""
 fit_only=""
 resume=""
+only=""
 while [ "$#" -gt 0 ]; do
     case "$1" in
         --boards) boards="$2"; shift 2 ;;
@@ -42,6 +46,7 @@ while [ "$#" -gt 0 ]; do
         --write) write=1; shift ;;
         --fit-only) fit_only=1; shift ;;
         --resume) resume=1; shift ;;
+        --only) only="$2"; shift 2 ;;
         -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
         *) echo "cost.sh: unknown argument '$1'" >&2; exit 2 ;;
     esac
@@ -102,6 +107,7 @@ encode_clips() {
     clips=()
     local s set name input codec b tag clip frames
     mkdir -p "$out/inputs"
+    [ -z "$only" ] || [ "$only" = rma ] || repeating=()
     for s in "${repeating[@]}"; do
         read -r set name input frames <<<"$s"
         local long="$out/inputs/$name.bvh"
@@ -114,6 +120,7 @@ encode_clips() {
     for s in "${sources[@]}"; do
         read -r set name input codecs <<<"$s"
         for codec in ${codecs:-index pca-spline predictive index-fast}; do
+            [ -z "$only" ] || [ "$codec" = "$only" ] || continue
             local args=(--codec "$codec")
             [ "$codec" = index-fast ] && args=(--codec index --index-layout fast)
             for b in $(bounds "$input" "$codec"); do
@@ -259,7 +266,7 @@ fit_args=("$tsv")
 if [ -n "$write" ]; then
     # shellcheck source=scripts/bench_splice.sh
     source scripts/bench_splice.sh
-    splice_benchmarks cost "$out/fit.md"
+    splice_benchmarks "cost${only:+-$only}" "$out/fit.md"
     rustfmt --edition 2021 encoder/src/target/calibration.rs
     cargo build --release -q -p mocap-cli
     echo "cost.sh: wrote encoder/src/target/calibration.rs and BENCHMARKS.md (bench:cost); rebuild done" >&2

@@ -245,12 +245,15 @@ fn fit_command(measured: &Path, write: Option<&Path>) -> super::Result {
             .find(|b| b.board == board)
             .map(|b| b.max_channels)
     })?;
-    let fitted = fit::fit(&rows)?;
+    // The codecs measured are fitted (and printed); the others keep the
+    // models shipped.
+    let measured_models = fit::fit(&rows)?;
+    let fitted = fit::with_shipped(measured_models.clone());
     println!(
         "Cost model: instructions per pose = coefficients · features, least squares of the relative error per core and codec on the calibration rows (`mocap target fit {}`).\n",
         measured.display()
     );
-    for f in &fitted {
+    for f in &measured_models {
         let names = f.codec.feature_names();
         let mut terms = String::new();
         for (i, (n, c)) in names.iter().zip(&f.coefficients).enumerate() {
@@ -280,7 +283,7 @@ fn fit_command(measured: &Path, write: Option<&Path>) -> super::Result {
         code.dedup_by_key(|(c, _)| *c);
         std::fs::write(
             out,
-            fit::calibration_source(&fitted, &fit::playback_stacks(&rows), fixed, &code),
+            fit::calibration_source(&fitted, &fit::stacks_with_shipped(&rows), fixed, &code),
         )
         .map_err(|e| format!("{}: {e}", out.display()))?;
         eprintln!("wrote {}", out.display());

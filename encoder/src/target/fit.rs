@@ -36,7 +36,7 @@ pub enum FitError {
     },
     #[error("{0}: {1}")]
     Io(PathBuf, std::io::Error),
-    #[error("{core} rma: no pca-spline calibration rows to take its body's coefficients from")]
+    #[error("{core} rma: no pca-spline model (measured or shipped) to take its body's coefficients from")]
     NoBody { core: Core },
     #[error(
         "{core} {codec}: {rows} calibration rows for {params} coefficients: measure more clips"
@@ -143,6 +143,12 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
                 .iter()
                 .find(|f| f.core == core && f.codec == CodecKind::PcaSpline)
                 .map(|f| f.coefficients.clone())
+                .or_else(|| {
+                    shipped()
+                        .into_iter()
+                        .find(|f| f.core == core && f.codec == CodecKind::PcaSpline)
+                        .map(|f| f.coefficients)
+                })
                 .ok_or(FitError::NoBody { core })?;
             let own = params - body.len();
             if g.len() < own + 2 {
@@ -194,6 +200,45 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
         });
     }
     Ok(out)
+}
+
+/// The models the encoder ships (`calibration.rs`).
+fn shipped() -> Vec<Fitted> {
+    super::calibration::MODELS
+        .iter()
+        .map(|m| Fitted {
+            core: m.core,
+            codec: m.codec,
+            coefficients: m.coefficients.to_vec(),
+        })
+        .collect()
+}
+
+/// `fitted` and, for every core and codec it has no model of, the one the
+/// encoder ships: a run that measured some codecs only (`scripts/cost.sh
+/// --only rma`) keeps the others' models. Sorted by core and codec.
+pub fn with_shipped(fitted: Vec<Fitted>) -> Vec<Fitted> {
+    let mut all = fitted;
+    for m in shipped() {
+        if !all.iter().any(|f| f.core == m.core && f.codec == m.codec) {
+            all.push(m);
+        }
+    }
+    all.sort_by_key(|f| (f.core, f.codec));
+    all
+}
+
+/// [`playback_stacks`] of `rows` and, for every core and codec they have
+/// no row of, the stack the encoder ships.
+pub fn stacks_with_shipped(rows: &[Measurement]) -> Vec<(Core, CodecKind, u32)> {
+    let mut all = playback_stacks(rows);
+    for &(c, k, b) in super::calibration::PLAYBACK_STACK_BYTES {
+        if !all.iter().any(|&(c2, k2, _)| (c2, k2) == (c, k)) {
+            all.push((c, k, b));
+        }
+    }
+    all.sort_by_key(|&(c, k, _)| (c, k));
+    all
 }
 
 /// Least squares of `a · c = b` over the columns `used` (the others 0).
