@@ -387,3 +387,45 @@ pub fn predict_with(fitted: &[Fitted], r: &Measurement) -> Option<f64> {
     let f = find(r.core).or_else(|| (r.core == Core::M4F).then(|| find(Core::M3)).flatten())?;
     Some(instructions(&f.coefficients, &r.features.x))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run that measured one codec replaces that codec's models and keeps
+    /// every other shipped one, in (core, codec) order.
+    #[test]
+    fn a_partial_fit_keeps_the_shipped_models() {
+        let all = with_shipped(Vec::new());
+        assert_eq!(all, shipped_sorted());
+        let mine = Fitted {
+            core: Core::M3,
+            codec: CodecKind::Rma,
+            coefficients: vec![1.0; CodecKind::Rma.feature_names().len()],
+        };
+        let merged = with_shipped(vec![mine.clone()]);
+        assert_eq!(
+            merged
+                .iter()
+                .filter(|f| (f.core, f.codec) == (Core::M3, CodecKind::Rma))
+                .collect::<Vec<_>>(),
+            [&mine]
+        );
+        let others = |v: &[Fitted]| {
+            v.iter()
+                .filter(|f| (f.core, f.codec) != (Core::M3, CodecKind::Rma))
+                .cloned()
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(others(&merged), others(&all));
+        assert!(merged
+            .windows(2)
+            .all(|w| (w[0].core, w[0].codec) < (w[1].core, w[1].codec)));
+    }
+
+    fn shipped_sorted() -> Vec<Fitted> {
+        let mut s = shipped();
+        s.sort_by_key(|f| (f.core, f.codec));
+        s
+    }
+}
