@@ -9,10 +9,10 @@ pub const PLAYER_FIXED_BYTES: usize = 248;
 
 /// The decoder's code per core, every codec linked (`scripts/firmware.sh size`).
 pub const DECODER_CODE_BYTES: &[(Core, usize)] = &[
-    (Core::M0, 48982),
-    (Core::M3, 42832),
-    (Core::M4F, 43208),
-    (Core::Rv32, 53164),
+    (Core::M0, 70022),
+    (Core::M3, 60048),
+    (Core::M4F, 60636),
+    (Core::Rv32, 74716),
 ];
 
 /// Instructions per pose, per core and codec.
@@ -71,6 +71,25 @@ pub const MODELS: &[Model] = &[
         ],
     },
     Model {
+        core: Core::M0,
+        codec: CodecKind::Rma,
+        coefficients: &[
+            3.589218715528415e2,
+            9.28835269615915e0,
+            3.335419077505883e2,
+            3.362787385908792e2,
+            0e0,
+            2.5196483536396204e3,
+            7.917126963028483e2,
+            2.260870426077217e1,
+            1.49497922161591e2,
+            6.271787845369839e0,
+            1.77263522157839e3,
+            0e0,
+            0e0,
+        ],
+    },
+    Model {
         core: Core::M3,
         codec: CodecKind::Index,
         coefficients: &[
@@ -121,6 +140,25 @@ pub const MODELS: &[Model] = &[
             9.951260174348496e0,
             1.4441238556545825e1,
             1.5019833148701505e1,
+        ],
+    },
+    Model {
+        core: Core::M3,
+        codec: CodecKind::Rma,
+        coefficients: &[
+            1.4817260179274655e1,
+            1.2256380186326606e1,
+            6.614858949523197e1,
+            5.494346174047927e1,
+            2.798307594452396e-1,
+            9.059049640720366e2,
+            3.444230587483848e2,
+            3.506067874105751e1,
+            1.2433333539473085e2,
+            3.775618536987949e0,
+            2.0863433143377233e3,
+            0e0,
+            0e0,
         ],
     },
     Model {
@@ -176,6 +214,25 @@ pub const MODELS: &[Model] = &[
             1.7937243392336782e1,
         ],
     },
+    Model {
+        core: Core::Rv32,
+        codec: CodecKind::Rma,
+        coefficients: &[
+            -3.5451954527105265e0,
+            1.4602919056387043e1,
+            9.934803035379295e1,
+            5.646583970317057e1,
+            0e0,
+            1.096129200360682e3,
+            3.619150150653081e2,
+            2.767544348938472e1,
+            1.324819371410464e2,
+            3.796728593946259e0,
+            2.0589877367888016e3,
+            0e0,
+            0e0,
+        ],
+    },
 ];
 
 /// Peak stack of the playback path (`next_frame` and what it calls), the most measured.
@@ -184,16 +241,20 @@ pub const PLAYBACK_STACK_BYTES: &[(Core, CodecKind, u32)] = &[
     (Core::M0, CodecKind::PcaSpline, 1860),
     (Core::M0, CodecKind::Predictive, 556),
     (Core::M0, CodecKind::IndexFast, 740),
+    (Core::M0, CodecKind::Rma, 2148),
     (Core::M3, CodecKind::Index, 492),
     (Core::M3, CodecKind::PcaSpline, 1676),
     (Core::M3, CodecKind::Predictive, 492),
     (Core::M3, CodecKind::IndexFast, 616),
+    (Core::M3, CodecKind::Rma, 1932),
     (Core::M4F, CodecKind::Index, 492),
     (Core::M4F, CodecKind::PcaSpline, 1660),
     (Core::M4F, CodecKind::Predictive, 492),
     (Core::M4F, CodecKind::IndexFast, 616),
+    (Core::M4F, CodecKind::Rma, 1916),
     (Core::Rv32, CodecKind::Index, 400),
     (Core::Rv32, CodecKind::PcaSpline, 1708),
     (Core::Rv32, CodecKind::Predictive, 404),
     (Core::Rv32, CodecKind::IndexFast, 512),
+    (Core::Rv32, CodecKind::Rma, 1948),
 ];
