@@ -144,10 +144,10 @@ pub fn fit(rows: &[Measurement]) -> Result<Vec<Fitted>, FitError> {
                 .find(|f| f.core == core && f.codec == CodecKind::PcaSpline)
                 .map(|f| f.coefficients.clone())
                 .or_else(|| {
-                    shipped()
-                        .into_iter()
-                        .find(|f| f.core == core && f.codec == CodecKind::PcaSpline)
-                        .map(|f| f.coefficients)
+                    super::calibration::MODELS
+                        .iter()
+                        .find(|m| m.core == core && m.codec == CodecKind::PcaSpline)
+                        .map(|m| m.coefficients.to_vec())
                 })
                 .ok_or(FitError::NoBody { core })?;
             let own = params - body.len();
