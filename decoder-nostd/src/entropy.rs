@@ -352,6 +352,15 @@ impl<'a, 't> Decoder<'a, 't> {
         })
     }
 
+    /// Goes on decoding where another decoder of the same stream stopped:
+    /// its state `x` ([`Decoder::state`]) and its unread bytes
+    /// ([`Decoder::rest`]). Unchecked: a state that no decoder left gives
+    /// garbage symbols, never a panic (a codec keeps these two in its
+    /// player state between frames).
+    pub fn resume(table: Table<'t>, x: u32, rest: &'a [u8]) -> Self {
+        Decoder { table, x, rest }
+    }
+
     #[inline(always)]
     fn byte(&mut self) -> u32 {
         match *self.rest {
@@ -385,9 +394,20 @@ impl<'a, 't> Decoder<'a, 't> {
     /// state's update and renormalisation.
     #[inline(always)]
     fn step(&mut self, find: impl FnOnce(&Table<'t>, u32) -> (u32, u32, u32)) -> u32 {
-        let n = self.table.precision;
+        let table = self.table;
+        self.step_of(&table, find)
+    }
+
+    /// [`Decoder::step`] with the counts of `table`.
+    #[inline(always)]
+    fn step_of(
+        &mut self,
+        table: &Table<'t>,
+        find: impl FnOnce(&Table<'t>, u32) -> (u32, u32, u32),
+    ) -> u32 {
+        let n = table.precision;
         let slot = self.x & ((1u32 << n).wrapping_sub(1));
-        let (s, cum, f) = find(&self.table, slot);
+        let (s, cum, f) = find(table, slot);
         self.x = f
             .wrapping_mul(self.x >> n)
             .wrapping_add(slot.wrapping_sub(cum));
@@ -435,11 +455,26 @@ impl<'a, 't> Decoder<'a, 't> {
         self.escape(s)
     }
 
+    /// [`Decoder::value`] with the counts of another table, in the same
+    /// stream (SPEC.md §10.3: a stream may mix the steps of several
+    /// tables, each step decoded with the table it was coded with).
+    #[inline]
+    pub fn value_of(&mut self, table: &Table<'t>) -> u32 {
+        let s = self.step_of(table, |t, slot| t.find(slot));
+        self.escape_of(table.alphabet, s)
+    }
+
     /// The value of symbol `s`: `s` below `E`, else the escaped value read
     /// after it.
     #[inline(always)]
     fn escape(&mut self, s: u32) -> u32 {
-        let e = self.table.alphabet.wrapping_sub(1);
+        self.escape_of(self.table.alphabet, s)
+    }
+
+    /// [`Decoder::escape`] for a table of `alphabet` symbols.
+    #[inline(always)]
+    fn escape_of(&mut self, alphabet: u32, s: u32) -> u32 {
+        let e = alphabet.wrapping_sub(1);
         if s < e {
             return s;
         }
@@ -462,6 +497,11 @@ impl<'a, 't> Decoder<'a, 't> {
     /// Stream bytes not read yet.
     pub fn remaining(&self) -> usize {
         self.rest.len()
+    }
+
+    /// The stream's unread bytes.
+    pub fn rest(&self) -> &'a [u8] {
+        self.rest
     }
 
     /// Whether the stream ended exactly where the encoder started: every

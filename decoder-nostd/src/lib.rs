@@ -86,8 +86,9 @@ pub mod pca_spline_cache {
 #[cfg(feature = "codec-pattern")]
 pub mod pattern {
     pub use crate::codec::pattern::{
-        interpolate, position, taps, weights, window, FLAG_SHARED, HEAD_WIDE_BASE, LAYOUT_COLUMNS,
-        LAYOUT_PACKED, LAYOUT_ROWS, MAX_NODES, MAX_SEGMENT, PACKED_TAIL, WIDE_BASE_2,
+        coded_extent, for_each_coded_segment, interpolate, position, taps, weights, window,
+        FLAG_CODED, FLAG_SHARED, HEAD_WIDE_BASE, LAYOUT_COLUMNS, LAYOUT_PACKED, LAYOUT_ROWS,
+        MAX_BLOCK_BITS, MAX_NODES, MAX_SEGMENT, PACKED_TAIL, WIDE_BASE_2,
     };
 }
 

@@ -292,37 +292,80 @@ impl Model {
     /// reverse). The state starts at `2^23` and is flushed as four bytes,
     /// little-endian, at the stream's start.
     pub fn encode(&self, ops: &[Op]) -> Result<Vec<u8>, EntropyError> {
-        let n = self.precision;
-        let mut out = Vec::new();
-        let mut x: u32 = STATE_LOW;
-        for &op in ops.iter().rev() {
-            let (f, c, shift) = match op {
-                Op::Symbol(s) => {
-                    let f = self.counts.get(s as usize).copied().unwrap_or(0);
-                    if f == 0 {
-                        return Err(EntropyError::NoProbability { symbol: s });
-                    }
-                    (f, self.cum[s as usize], n)
-                }
-                Op::Raw { value, bits } => {
-                    if bits > MAX_RAW_BITS {
-                        return Err(EntropyError::RawBits(bits));
-                    }
-                    (1, value & ((1u32 << bits) - 1), bits)
-                }
-            };
-            // x_max = ((L >> shift) << 8) · f: after the step x < 2^31.
-            let x_max = u64::from(f) << (31 - shift);
-            while u64::from(x) >= x_max {
-                out.push(x as u8);
-                x >>= 8;
-            }
-            x = ((x / f) << shift) + (x % f) + c;
-        }
-        out.extend_from_slice(&x.to_be_bytes());
-        out.reverse();
-        Ok(out)
+        let steps = ops
+            .iter()
+            .map(|&op| self.step(op))
+            .collect::<Result<Vec<Step>, EntropyError>>()?;
+        Ok(encode_steps(&steps))
     }
+
+    /// The rANS step of `op` under this table.
+    pub fn step(&self, op: Op) -> Result<Step, EntropyError> {
+        match op {
+            Op::Symbol(s) => {
+                let f = self.counts.get(s as usize).copied().unwrap_or(0);
+                if f == 0 {
+                    return Err(EntropyError::NoProbability { symbol: s });
+                }
+                Ok(Step {
+                    f,
+                    c: self.cum[s as usize],
+                    scale: self.precision,
+                })
+            }
+            Op::Raw { value, bits } => {
+                if bits > MAX_RAW_BITS {
+                    return Err(EntropyError::RawBits(bits));
+                }
+                Ok(Step {
+                    f: 1,
+                    c: value & ((1u32 << bits) - 1),
+                    scale: bits,
+                })
+            }
+        }
+    }
+
+    /// Appends the steps of the escaped value `v` (SPEC.md §10.4) under
+    /// this table, its escape the last symbol: for streams that mix the
+    /// steps of several tables ([`encode_steps`]).
+    pub fn push_value_steps(&self, out: &mut Vec<Step>, v: u32) -> Result<(), EntropyError> {
+        let mut ops = Vec::with_capacity(4);
+        push_value(&mut ops, v, (self.counts.len() - 1) as u32)?;
+        for op in ops {
+            out.push(self.step(op)?);
+        }
+        Ok(())
+    }
+}
+
+/// One rANS step: the count `f`, start `c` and scale (`n` of the table, or
+/// the raw bits' `k`) of one symbol or raw value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step {
+    f: u32,
+    c: u32,
+    scale: u32,
+}
+
+/// One block of steps, in decoding order, of any tables (rANS encodes
+/// them in reverse; SPEC.md §10.5). The state starts at `2^23` and is
+/// flushed as four bytes, little-endian, at the stream's start.
+pub fn encode_steps(steps: &[Step]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut x: u32 = STATE_LOW;
+    for &Step { f, c, scale } in steps.iter().rev() {
+        // x_max = ((L >> scale) << 8) · f: after the step x < 2^31.
+        let x_max = u64::from(f) << (31 - scale);
+        while u64::from(x) >= x_max {
+            out.push(x as u8);
+            x >>= 8;
+        }
+        x = ((x / f) << scale) + (x % f) + c;
+    }
+    out.extend_from_slice(&x.to_be_bytes());
+    out.reverse();
+    out
 }
 
 /// Appends the steps of value `v` with escape symbol `escape` (§10.4).

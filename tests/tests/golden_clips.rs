@@ -363,12 +363,14 @@ fn pre_digest_servo_clips_keep_decoding() {
 
 /// `pattern` clips as the encoder wrote them before its current layout,
 /// kept as committed: `tests/golden/pre-columns/` (layout 0, SPEC.md
-/// §11.3: a `u16` node count, records in rows) and `tests/golden/pre-packed/`
-/// (layout 1, §11.3b: columns of whole-byte codes). They still decode to
-/// exactly their committed output.
+/// §11.3: a `u16` node count, records in rows), `tests/golden/pre-packed/`
+/// (layout 1, §11.3b: columns of whole-byte codes) and
+/// `tests/golden/pre-coded/` (layout 2 with plain segment lists, §11.1,
+/// before the coded lists of §11.1b). They still decode to exactly their
+/// committed output.
 #[test]
 fn earlier_pattern_layouts_keep_decoding() {
-    for dir in ["pre-columns", "pre-packed"] {
+    for dir in ["pre-columns", "pre-packed", "pre-coded"] {
         let dir = golden_dir().join(dir);
         let name = "pattern_demo_20mm";
         let bytes = std::fs::read(dir.join(format!("{name}.mcb"))).unwrap();
@@ -384,7 +386,9 @@ fn earlier_pattern_layouts_keep_decoding() {
 }
 
 /// The encoder still writes layout 1 on request (`--pattern-layout
-/// columns`, SPEC.md §11.3b): exactly the committed layout-1 clip.
+/// columns`, SPEC.md §11.3b): a clip that decodes to exactly the committed
+/// layout-1 clip's output (the bytes differ since the segment lists are
+/// coded, §11.1b, and the patterns numbered in order of use).
 #[test]
 fn pattern_columns_layout_is_the_committed_layout_1_clip() {
     let m = demo();
@@ -398,16 +402,40 @@ fn pattern_columns_layout_is_the_committed_layout_1_clip() {
         pattern: mocap_encoder::codec::pattern::PatternOptions {
             nodes: Vec::new(),
             layout: mocap_encoder::codec::pattern::Layout::Columns,
+            ..Default::default()
         },
     };
     let made = encode::encode(&m, &opts).unwrap().bytes;
     let committed = std::fs::read(golden_dir().join("pre-packed/pattern_demo_20mm.mcb")).unwrap();
+    // What the decoder makes of them, without the lines about the bytes.
+    let decoded = |b: &[u8]| -> String {
+        decoded_report(b)
+            .lines()
+            .filter(|l| !l.starts_with("codec ") && !l.starts_with("bytes "))
+            .flat_map(|l| [l, "\n"])
+            .collect()
+    };
+    let (made_out, committed_out) = (decoded(&made), decoded(&committed));
     assert!(
-        made == committed,
-        "{} B against {} B",
+        made_out == committed_out,
+        "{} B against {} B:\n{}",
         made.len(),
-        committed.len()
+        committed.len(),
+        diff(&committed_out, &made_out)
     );
+    let section = |b: &[u8]| {
+        let clip = mocap_decoder::Clip::parse(b).unwrap();
+        let s = clip
+            .sections()
+            .find(|s| s.id == mocap_encoder::codec::pattern::SECTION_ID)
+            .unwrap();
+        mocap_encoder::codec::pattern::inspect(s.bytes).unwrap()
+    };
+    assert_eq!(
+        section(&made).layout,
+        mocap_decoder::pattern::LAYOUT_COLUMNS
+    );
+    assert!(section(&made).coded_lists);
 }
 
 /// Clips encoded from the corpus, pinned by digests of their bytes and of

@@ -414,3 +414,82 @@ fn rma_scratch_over_the_cache_plays_the_same() {
     check::<300>(&clip, &all, &times, &want);
     check::<400>(&clip, &all, &times, &want);
 }
+
+/// `pattern` with entropy-coded segment lists (SPEC.md §11.1b) in blocks
+/// of 4, 8 and 64 segments (the demo played on to 2 000 frames): a player with room for every node's cursor
+/// (sequential steps through the streams), one without (a binary search
+/// over the blocks and a walk through one for every frame), frames in a
+/// jumping order and `sample_at` at 50 Hz in a scrambled order all give
+/// the sequential decode's poses.
+#[test]
+fn pattern_coded_lists_play_alike_in_any_order() {
+    let demo = generate::animatronic_demo();
+    let m = generate::long_take(&demo, &generate::LongOptions::new(2000)).unwrap();
+    for bits in [Some(2u8), Some(3), None] {
+        let opts = EncodeOptions {
+            key_bits: None,
+            codec: CodecChoice::Pattern,
+            bound: Bound::from_specs(&["0.5deg".parse::<BoundSpec>().unwrap()]),
+            metres_per_unit: units::detect(&m).metres(),
+            key_interval: None,
+            index_layout: Default::default(),
+            pattern: mocap_encoder::codec::pattern::PatternOptions {
+                block_bits: bits,
+                ..Default::default()
+            },
+        };
+        let bytes = encode::encode(&m, &opts).unwrap().bytes;
+        let clip = Clip::parse(&bytes).unwrap();
+        let section = clip
+            .sections()
+            .find(|s| s.id == mocap_encoder::codec::pattern::SECTION_ID)
+            .unwrap();
+        let info = mocap_encoder::codec::pattern::inspect(section.bytes).unwrap();
+        assert!(info.coded_lists, "bits {bits:?}: the lists are coded");
+        let segments: usize = info.nodes.iter().map(|n| n[1]).sum();
+        eprintln!(
+            "bits {bits:?}: {segments} segments, {} nodes",
+            info.nodes.len()
+        );
+        assert!(
+            segments > 8 * info.nodes.len(),
+            "bits {bits:?}: {segments} segments"
+        );
+        let all = clipfile::decode_all(&clip).unwrap();
+        let h = clip.header();
+        let (n, frames) = (h.channel_count(), h.frame_count());
+        // Room for the cursors (channels + 12 words a node) and none (the
+        // demo has 42 channels and 5 nodes).
+        let mut visits = Vec::new();
+        let mut f = 5u32;
+        for i in 0..400u64 {
+            f = (f * 1103 + 12345) % frames;
+            visits.push((
+                i % 3 != 0,
+                if i % 3 != 0 { u64::from(f) } else { i * 20_000 },
+            ));
+        }
+        let big = scrambled_poses::<512>(&clip, &visits);
+        assert!(n + 12 * info.nodes.len() > 48);
+        let small = scrambled_poses::<48>(&clip, &visits);
+        assert_eq!(big, small, "bits {bits:?}");
+        for (&(frame, at), pose) in visits.iter().zip(&big) {
+            if frame {
+                let i = at as usize * n;
+                assert_eq!(&pose[..], &all[i..i + n], "bits {bits:?} frame {at}");
+            }
+        }
+        // In order, every frame.
+        let mut player = Player::<512>::new(&clip).unwrap();
+        let mut out = vec![0i32; n];
+        for f in 0..frames {
+            player.next_frame(&mut out).unwrap();
+            let i = f as usize * n;
+            assert_eq!(
+                &out[..],
+                &all[i..i + n],
+                "bits {bits:?} in order, frame {f}"
+            );
+        }
+    }
+}

@@ -260,6 +260,7 @@ pub fn run(a: Args) -> super::Result {
         pattern: mocap_encoder::codec::pattern::PatternOptions {
             nodes: a.pattern_nodes.clone().map(|n| n.0).unwrap_or_default(),
             layout: a.pattern_layout,
+            ..Default::default()
         },
     };
     let enc = match chip {

@@ -34,7 +34,7 @@ fn attempt(
         let nodes = pattern::nodes_with(m, &opts.pattern.nodes)?;
         let accept = pattern::accept_for(&opts.bound);
         let fps = 1.0 / m.frame_time;
-        let enc = pattern::encode(&fixed.values, tol, accept, &nodes, fps, opts.pattern.layout)?;
+        let enc = pattern::encode(&fixed.values, tol, accept, &nodes, fps, &opts.pattern)?;
         let expected = FixedChannels {
             kinds: fixed.kinds.clone(),
             values: enc.decoded,

@@ -93,7 +93,7 @@ pub fn encode_pattern_shared(
             database,
             sections,
             decoded,
-        } = pattern::encode_shared(&takes, tol, accept, &nodes, fps, opts.pattern.layout)?;
+        } = pattern::encode_shared(&takes, tol, accept, &nodes, fps, &opts.pattern)?;
         let mut attempts = Vec::new();
         for (k, (((m, r), segments), values)) in motions
             .iter()

@@ -682,6 +682,7 @@ impl ShowSpec {
             pattern: crate::codec::pattern::PatternOptions {
                 nodes: pattern_nodes,
                 layout,
+                ..Default::default()
             },
             rig,
             fade_ms: show

@@ -315,6 +315,109 @@ impl Bits<'_> {
     }
 }
 
+// ---------------------------------------------------------------- §10
+
+/// §10.2: a table's counts (they add up to `M = 2^n`), read from the start
+/// of `r`.
+pub struct RansTable {
+    pub n: u32,
+    pub counts: Vec<u32>,
+}
+
+impl RansTable {
+    pub fn read(r: &mut Reader<'_>) -> RansTable {
+        let head = r.u8();
+        let (n, big_w) = (u32::from(head & 15), u32::from(head >> 4));
+        let a = r.varint() as usize;
+        assert!((1..=65_536).contains(&a), "alphabet");
+        let rest = &r.bytes[r.pos..];
+        let mut bits = Bits {
+            bytes: rest,
+            bit: 0,
+        };
+        let mut left = 1u32 << n;
+        let mut counts = Vec::new();
+        for _ in 0..a - 1 {
+            let width = big_w.min(32 - left.leading_zeros());
+            let f = bits.read(width);
+            assert!(f <= left, "a count above what is left");
+            left -= f;
+            counts.push(f);
+        }
+        counts.push(left);
+        let used = bits.bit.div_ceil(8);
+        assert_eq!(bits.read((used * 8 - bits.bit) as u32), 0, "padding");
+        r.take(used);
+        RansTable { n, counts }
+    }
+}
+
+/// §10.3: a stream being decoded (one block).
+pub struct RansStream<'a> {
+    x: u32,
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> RansStream<'a> {
+    pub fn new(bytes: &'a [u8]) -> RansStream<'a> {
+        let x = u32::from_le_bytes(bytes[..4].try_into().unwrap());
+        assert!((1 << 23..1 << 31).contains(&x), "x0 in range");
+        RansStream { x, bytes, pos: 4 }
+    }
+
+    fn renormalise(&mut self) {
+        while self.x < 1 << 23 {
+            let b = self.bytes.get(self.pos).copied().unwrap_or(0);
+            self.pos += 1;
+            self.x = (self.x << 8) | u32::from(b);
+        }
+    }
+
+    pub fn symbol(&mut self, t: &RansTable) -> u32 {
+        let slot = self.x & ((1 << t.n) - 1);
+        let mut cum = 0;
+        for (s, &f) in t.counts.iter().enumerate() {
+            if slot < cum + f {
+                self.x = f * (self.x >> t.n) + slot - cum;
+                self.renormalise();
+                return s as u32;
+            }
+            cum += f;
+        }
+        unreachable!("the counts add up to M")
+    }
+
+    pub fn raw(&mut self, k: u32) -> u32 {
+        let v = self.x & ((1 << k) - 1);
+        self.x >>= k;
+        self.renormalise();
+        v
+    }
+
+    /// §10.4: an escaped value.
+    pub fn value(&mut self, t: &RansTable) -> u32 {
+        let e = t.counts.len() as u32 - 1;
+        let s = self.symbol(t);
+        if s < e {
+            return s;
+        }
+        let k = self.raw(5);
+        let r = if k > 16 {
+            let lo = self.raw(16);
+            (self.raw(k - 16) << 16) | lo
+        } else {
+            self.raw(k)
+        };
+        e.wrapping_add((1u32 << k) | r).wrapping_sub(1)
+    }
+
+    /// Every byte read and the state where the encoder started (§10.5).
+    pub fn finished(&self) -> bool {
+        self.pos == self.bytes.len() && self.x == 1 << 23
+    }
+}
+
 // ---------------------------------------------------------------- §3.7
 
 /// §3.7: the missing samples of a marker clip, `[marker][frame]` (true:
@@ -1214,7 +1317,7 @@ impl Pattern {
     pub fn parse(section: &[u8], model: Option<&[u8]>, channels: usize) -> Pattern {
         let mut r = Reader::new(section);
         let flags = r.u8();
-        assert_eq!(flags & !1, 0, "reserved flags");
+        assert_eq!(flags & !3, 0, "reserved flags");
         let mut db_reader;
         let db = if flags & 1 == 1 {
             db_reader = Reader::new(model.expect("a shared database"));
@@ -1292,11 +1395,45 @@ impl Pattern {
             nodes.push((list, records, Vec::new()));
         }
         assert!(seen.iter().all(|&k| k == 1), "every channel in one node");
+        // §11.1b: CODED lists, after the two tables.
+        let tables = (flags & 2 == 2).then(|| (RansTable::read(&mut r), RansTable::read(&mut r)));
         for node in &mut nodes {
-            let s = u16(&mut r);
-            node.2 = (0..s)
-                .map(|_| (u32(&mut r), u16(&mut r) as usize))
-                .collect();
+            let s = u16(&mut r) as usize;
+            node.2 = match &tables {
+                None => (0..s)
+                    .map(|_| (u32(&mut r), u16(&mut r) as usize))
+                    .collect(),
+                Some((lengths, patterns)) => {
+                    let b = r.u8();
+                    assert!(b <= 15, "b");
+                    let k = s.div_ceil(1 << b);
+                    let index: Vec<(u32, u32, usize)> = (0..k)
+                        .map(|_| (u32(&mut r), u32::from(u16(&mut r)), u32(&mut r) as usize))
+                        .collect();
+                    let streams = r.take(index.last().unwrap().2);
+                    let mut segs = Vec::new();
+                    let mut from = 0;
+                    for (i, &(start, pattern, end)) in index.iter().enumerate() {
+                        let mut st = RansStream::new(&streams[from..end]);
+                        let (mut at, mut p) = (start, pattern);
+                        for j in 0..(s - i * (1 << b)).min(1 << b) {
+                            if j > 0 {
+                                let v = st.value(patterns);
+                                let d = ((v >> 1) as i32) ^ -((v & 1) as i32);
+                                p = p.wrapping_add(1).wrapping_add(d as u32);
+                            }
+                            segs.push((at, p as usize));
+                            at += st.value(lengths) + 1;
+                        }
+                        assert!(st.finished(), "a block's stream ends where it started");
+                        if let Some(next) = index.get(i + 1) {
+                            assert_eq!(next.0, at, "the next block starts where this one ends");
+                        }
+                        from = end;
+                    }
+                    segs
+                }
+            };
             assert_eq!(node.2[0].0, 0, "first segment at 0");
         }
         assert!(r.done(), "bytes after the segment lists");

@@ -16,16 +16,23 @@
 //! segments' start frames finds the same segment.
 
 mod columns;
+mod lists;
 mod packed;
 mod rows;
 
+use crate::entropy::Table;
 use crate::error::Error;
 use crate::reader::Reader;
+pub use lists::{coded_extent, for_each_coded_segment, MAX_BLOCK_BITS};
+use lists::{CodedList, Tables};
 
 /// Bytes of a segment: start frame (u32), pattern (u16).
 const SEGMENT: usize = 6;
 /// Flag bit 0 of the codec section: the database is a shared model section.
 pub const FLAG_SHARED: u8 = 1;
+/// Flag bit 1 of the codec section: the segment lists are entropy coded
+/// (§11.1b).
+pub const FLAG_CODED: u8 = 2;
 /// Most nodes a database may have.
 pub const MAX_NODES: usize = 255;
 /// Longest segment, frames (so the position arithmetic stays in 32 bits).
@@ -61,6 +68,8 @@ pub(crate) struct PatternCodec<'a> {
     frames: u32,
     /// The records' layout: [`LAYOUT_ROWS`] or [`LAYOUT_COLUMNS`] (§11.2).
     layout: u8,
+    /// Coded segment lists (§11.1b): their two tables.
+    tables: Option<Tables<'a>>,
 }
 
 /// One node of the database.
@@ -280,7 +289,7 @@ impl<'a> PatternCodec<'a> {
     ) -> Result<Self, Error> {
         let malformed = |rule| Error::PatternMalformed { rule };
         let (&flags, rest) = bytes.split_first().ok_or(malformed("an empty section"))?;
-        if flags & !FLAG_SHARED != 0 {
+        if flags & !(FLAG_SHARED | FLAG_CODED) != 0 {
             return Err(malformed("reserved flags set"));
         }
         let shared = flags & FLAG_SHARED != 0;
@@ -300,12 +309,31 @@ impl<'a> PatternCodec<'a> {
         } else {
             rest.get(len..).unwrap_or(&[])
         };
+        let (tables, segments) = if flags & FLAG_CODED != 0 {
+            let (lengths, a) = Table::parse(segments)?;
+            let rest = segments.get(a..).unwrap_or(&[]);
+            let (patterns, b) = Table::parse(rest)?;
+            let t = Tables { lengths, patterns };
+            (Some(t), rest.get(b..).unwrap_or(&[]))
+        } else {
+            (None, segments)
+        };
         let mut r = Reader::new(nodes);
         let mut s = Reader::new(segments);
         for _ in 0..node_count {
             let node = read_node(&mut r, layout).ok_or(malformed("database truncated"))?;
-            let (n, list) = read_segments(&mut s).ok_or(malformed("segment list truncated"))?;
-            check_segments(n, list, node.pattern_count, frames)?;
+            if let Some(t) = &tables {
+                if segments.get(s.pos().wrapping_add(2)) > Some(&MAX_BLOCK_BITS) {
+                    return Err(malformed("a block size over 2^15 segments"));
+                }
+                let (list, len) = CodedList::read(segments, s.pos())
+                    .ok_or(malformed("segment list truncated"))?;
+                list.check(t, node.pattern_count, frames)?;
+                s.take(len).ok_or(malformed("segment list truncated"))?;
+            } else {
+                let (n, list) = read_segments(&mut s).ok_or(malformed("segment list truncated"))?;
+                check_segments(n, list, node.pattern_count, frames)?;
+            }
         }
         if !s.is_empty() {
             return Err(malformed("bytes after the last segment list"));
@@ -316,6 +344,7 @@ impl<'a> PatternCodec<'a> {
             node_count,
             frames,
             layout,
+            tables,
         })
     }
 
@@ -386,7 +415,11 @@ impl<'a> PatternCodec<'a> {
         c[NC] = node.nc as i32;
         c[NODE_AT] = at as i32;
         c[LIST_AT] = s as i32;
-        let next = s.wrapping_add(2).wrapping_add(count.wrapping_mul(SEGMENT));
+        let next = if self.tables.is_some() {
+            s.wrapping_add(CodedList::read(self.segments, s)?.1)
+        } else {
+            s.wrapping_add(2).wrapping_add(count.wrapping_mul(SEGMENT))
+        };
         Some((node.data_end, next))
     }
 
@@ -419,6 +452,9 @@ impl<'a> PatternCodec<'a> {
     fn advance(&self, c: &mut [i32; CURSOR_WORDS], f: u32) -> Option<()> {
         let node = NodeAt::read(self.nodes, c[NODE_AT] as u32 as usize, self.layout)?;
         let s = c[LIST_AT] as u32 as usize;
+        if let Some(t) = &self.tables {
+            return self.advance_coded(c, f, &node, s, t);
+        }
         let count = usize::from(u16_at(self.segments, s)?);
         let list_at = s.wrapping_add(2);
         let list = self
@@ -455,12 +491,55 @@ impl<'a> PatternCodec<'a> {
         c[NEXT] = i.wrapping_add(1) as i32;
         Some(())
     }
+
+    /// [`PatternCodec::advance`] on a coded list (§11.1b): the segment
+    /// after the cursor's, decoded from the state the cursor keeps, or
+    /// found by a binary search over the blocks and a walk through one.
+    fn advance_coded(
+        &self,
+        c: &mut [i32; CURSOR_WORDS],
+        f: u32,
+        node: &NodeAt,
+        s: usize,
+        t: &Tables<'_>,
+    ) -> Option<()> {
+        let (list, _) = CodedList::read(self.segments, s)?;
+        let next = c[NEXT] as u32 as usize;
+        let here = lists::Seg {
+            start: c[START] as u32,
+            end: c[END] as u32,
+            pattern: c[PAT] as u32,
+            i: next.wrapping_sub(1),
+            x: c[X] as u32,
+            pos: c[POS] as u32 as usize,
+        };
+        let seg = match (f >= here.end && next > 0)
+            .then(|| list.next(&here, t))
+            .flatten()
+        {
+            Some(n) if f < n.end => n,
+            _ => list.find(f, t)?,
+        };
+        let off = u32_at(
+            self.nodes,
+            node.off_at
+                .wrapping_add((seg.pattern as usize).wrapping_mul(4)),
+        )?;
+        c[START] = seg.start as i32;
+        c[END] = seg.end as i32;
+        c[REC_AT] = node.data_at.wrapping_add(off as usize) as i32;
+        c[NEXT] = seg.i.wrapping_add(1) as i32;
+        c[X] = seg.x as i32;
+        c[POS] = seg.pos as i32;
+        c[PAT] = seg.pattern as i32;
+        Some(())
+    }
 }
 
 /// Player-state words per node: where the node is in the database and
 /// the segment it played last (§11.4), so that the next frame reads no
 /// header and searches no list.
-pub(crate) const CURSOR_WORDS: usize = 9;
+pub(crate) const CURSOR_WORDS: usize = 12;
 /// Cursor words: the segment's start and end frames, its pattern record
 /// and the end of the node's records (offsets in the database's nodes;
 /// `DATA_END` = 0 before the cursors are filled), the node's channel list
@@ -475,6 +554,12 @@ const NC: usize = 5;
 const NEXT: usize = 6;
 const NODE_AT: usize = 7;
 const LIST_AT: usize = 8;
+/// Coded lists (§11.1b) only: the rANS state after the segment's steps,
+/// the offset of the stream's next byte in the node's streams, the
+/// segment's pattern.
+const X: usize = 9;
+const POS: usize = 10;
+const PAT: usize = 11;
 
 /// Where a node record's parts are (§11.2), as offsets in the nodes.
 struct NodeAt {
@@ -745,7 +830,7 @@ mod tests {
             b[at] = v;
             b
         };
-        assert_eq!(rule(&with(0, 2), None, 2, 6), "reserved flags set");
+        assert_eq!(rule(&with(0, 4), None, 2, 6), "reserved flags set");
         assert_eq!(
             rule(&with(0, 1), None, 2, 6),
             "a shared database but no model section"
@@ -804,6 +889,89 @@ mod tests {
         two.extend_from_slice(&SECTION[60..]);
         two.extend_from_slice(&[1, 0, 0, 0, 0, 0, 0, 0]);
         assert_eq!(rule(&two, None, 3, 6), "a channel in no node or in two");
+        Ok(())
+    }
+
+    /// SPEC.md §7.9b's section: §7.9's clip with its segment list coded.
+    const CODED: [u8; 76] = [
+        0x02, 0x01, 0x02, 0x02, 0x00, 0x02, 0x00, 0x1c, 0x00, 0x00, 0x00, 0x00, 0x00, 0x01, 0x00,
+        0x02, 0x00, 0x00, 0x00, 0x00, 0x00, 0x0f, 0x00, 0x00, 0x00, 0x03, 0x00, 0x08, 0xfa, 0x00,
+        0x00, 0x64, 0xc8, 0x0a, 0x0c, 0xfe, 0x00, 0xd0, 0x87, 0x3e, 0x01, 0x00, 0x40, 0xf4, 0x01,
+        0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x11, 0x06, 0x11, 0x10, 0x02, 0x01, 0x02,
+        0x00, 0x06, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x04, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00,
+        0x02,
+    ];
+
+    #[test]
+    fn the_coded_section_plays_and_its_rules_are_named() -> Result<(), Error> {
+        let codec = PatternCodec::parse(&CODED, None, 2, 6)?;
+        let expected = [
+            [1000, -500],
+            [1200, -250],
+            [1400, 0],
+            [1600, 250],
+            [1800, 500],
+            [2000, 0],
+        ];
+        // With cursors (in order, then backwards) and without.
+        let mut cursors = [0i32; CURSOR_WORDS];
+        for f in (0..6).chain((0..6).rev()) {
+            let mut out = [0i32; 2];
+            codec
+                .decode(f, &mut out, &mut cursors)
+                .ok_or(Error::PlayerInvariant { frame: f })?;
+            assert_eq!(out, expected[f as usize], "frame {f}");
+            codec
+                .decode_frame(f, &mut out)
+                .ok_or(Error::PlayerInvariant { frame: f })?;
+            assert_eq!(out, expected[f as usize], "frame {f} without cursors");
+        }
+        let with = |at: usize, v: u8| {
+            let mut b = CODED.to_vec();
+            b[at] = v;
+            b
+        };
+        const L: usize = 53;
+        assert_eq!(rule(&with(0, 6), None, 2, 6), "reserved flags set");
+        assert_eq!(
+            rule(&with(L + 8, 16), None, 2, 6),
+            "a block size over 2^15 segments"
+        );
+        // The stream's state below 2^23.
+        assert_eq!(
+            rule(&with(L + 22, 0), None, 2, 6),
+            "a block's stream state out of range"
+        );
+        // A length of 5 + 2: past the last frame.
+        assert_eq!(
+            rule(&with(L + 19, 0x03), None, 2, 6),
+            "a segment of 0 or over 65535 frames, or past the last frame"
+        );
+        // The block starting at frame 1.
+        assert_eq!(
+            rule(&with(L + 9, 1), None, 2, 6),
+            "a block does not start where the segments before it end"
+        );
+        // The first pattern 2: not in the node.
+        assert_eq!(
+            rule(&with(L + 13, 2), None, 2, 6),
+            "a segment's pattern is not in its node"
+        );
+        // One frame more than the segments cover.
+        assert_eq!(
+            rule(&CODED, None, 2, 7),
+            "the segments do not end at the last frame"
+        );
+        // A byte more in the stream, counted in its end: not where the
+        // encoder started.
+        let mut longer = CODED.to_vec();
+        longer[L + 15] = 5;
+        longer.push(0);
+        assert_eq!(
+            rule(&longer, None, 2, 6),
+            "a block's stream does not end where its encoder started"
+        );
+        assert_eq!(rule(&CODED[..75], None, 2, 6), "segment list truncated");
         Ok(())
     }
 

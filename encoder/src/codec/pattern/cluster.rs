@@ -142,6 +142,36 @@ pub struct NodePatterns {
     pub of_segment: Vec<usize>,
 }
 
+impl NodePatterns {
+    /// The patterns numbered in the order the segments first play them
+    /// (SPEC.md §11.1b codes each segment's pattern as its change from
+    /// the one after the last: in this order a new pattern costs nothing).
+    /// The same segments play the same patterns.
+    pub fn in_order_of_use(self) -> NodePatterns {
+        let mut new_of = vec![usize::MAX; self.patterns.len()];
+        let mut order = Vec::with_capacity(self.patterns.len());
+        for &p in &self.of_segment {
+            if new_of[p] == usize::MAX {
+                new_of[p] = order.len();
+                order.push(p);
+            }
+        }
+        // Patterns no segment plays (none from the clustering) keep their
+        // place after the rest.
+        for (p, n) in new_of.iter_mut().enumerate() {
+            if *n == usize::MAX {
+                *n = order.len();
+                order.push(p);
+            }
+        }
+        let mut patterns: Vec<Option<Pattern>> = self.patterns.into_iter().map(Some).collect();
+        NodePatterns {
+            patterns: order.iter().filter_map(|&p| patterns[p].take()).collect(),
+            of_segment: self.of_segment.iter().map(|&p| new_of[p]).collect(),
+        }
+    }
+}
+
 /// The k-means threshold: a segment may differ from its centre by this
 /// share of a channel's tolerance in the time-normalised space (the rest
 /// is left to resampling to its own length and to quantisation).

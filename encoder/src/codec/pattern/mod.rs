@@ -20,6 +20,7 @@
 //! around it proves the bound by decoding.
 
 pub mod cluster;
+pub mod lists;
 pub mod segment;
 
 use mocap_decoder::consts;
@@ -159,6 +160,10 @@ pub struct PatternOptions {
     pub nodes: Vec<Vec<String>>,
     /// How the records are stored.
     pub layout: Layout,
+    /// Segments per block of coded segment lists, as a power of two
+    /// (§11.1b; `None`: [`lists::BLOCK_BITS`]): a seek decodes up to a
+    /// block, each block costs about 14 bytes.
+    pub block_bits: Option<u8>,
 }
 
 /// How close a segment must be to its pattern under `bound`: strict under
@@ -201,9 +206,9 @@ pub fn encode(
     accept: Accept,
     nodes: &[Vec<usize>],
     fps: f64,
-    layout: Layout,
+    store: &PatternOptions,
 ) -> Result<Encoded, CodecError> {
-    let mut shared = encode_shared(&[values], tol, accept, nodes, fps, layout)?;
+    let mut shared = encode_shared(&[values], tol, accept, nodes, fps, store)?;
     let segments = shared.sections.pop().unwrap_or_default();
     Ok(Encoded {
         section: with_database(&shared.database, &segments),
@@ -215,7 +220,8 @@ pub fn encode(
 /// section `shared` that reads it from a model section (flag `SHARED`):
 /// the same segment lists, the same decoded values.
 pub fn with_database(database: &[u8], shared: &[u8]) -> Vec<u8> {
-    let mut section = vec![0u8];
+    let flags = shared.first().copied().unwrap_or(0);
+    let mut section = vec![flags & !mocap_decoder::pattern::FLAG_SHARED];
     section.extend(database);
     section.extend(shared.get(1..).unwrap_or(&[]));
     section
@@ -230,8 +236,9 @@ pub fn encode_shared(
     accept: Accept,
     nodes: &[Vec<usize>],
     fps: f64,
-    layout: Layout,
+    store: &PatternOptions,
 ) -> Result<Shared, CodecError> {
+    let layout = store.layout;
     let lengths: Vec<usize> = takes
         .iter()
         .map(|t| t.first().map_or(0, Vec::len))
@@ -258,7 +265,7 @@ pub fn encode_shared(
     let params = SegmentParams::at_rate(fps);
     let mut decoded = vec![vec![Vec::new(); channels]; takes.len()];
     let mut database = vec![nodes.len() as u8, layout.byte()];
-    let mut sections: Vec<Vec<u8>> = vec![vec![mocap_decoder::pattern::FLAG_SHARED]; takes.len()];
+    let mut node_lists: Vec<Vec<lists::NodeList>> = vec![Vec::new(); takes.len()];
     for channels in nodes {
         let mut channels = channels.clone();
         channels.sort_unstable();
@@ -290,7 +297,7 @@ pub fn encode_shared(
                 spans.push((first + a, end - a));
             }
         }
-        let np = cluster::patterns(&input, &spans);
+        let np = cluster::patterns(&input, &spans).in_order_of_use();
         let most = per_take.iter().map(|p| p.1).max().unwrap_or(0);
         if most > usize::from(u16::MAX) || np.patterns.len() > usize::from(u16::MAX) {
             return Err(CodecError::PatternTooMany {
@@ -301,15 +308,12 @@ pub fn encode_shared(
         write_node(&mut database, &channels, &np, layout);
         for (take, &(from, count)) in per_take.iter().enumerate() {
             let first = firsts[take];
-            let section = &mut sections[take];
-            section.extend((count as u16).to_le_bytes());
-            for (&(a, _), &p) in spans[from..from + count]
+            let (starts, patterns) = spans[from..from + count]
                 .iter()
                 .zip(&np.of_segment[from..from + count])
-            {
-                section.extend(((a - first) as u32).to_le_bytes());
-                section.extend((p as u16).to_le_bytes());
-            }
+                .map(|(&(a, _), &p)| ((a - first) as u32, p as u16))
+                .unzip();
+            node_lists[take].push(lists::NodeList { starts, patterns });
             for (i, &c) in channels.iter().enumerate() {
                 decoded[take][c] = (from..from + count)
                     .flat_map(|s| {
@@ -321,6 +325,17 @@ pub fn encode_shared(
             }
         }
     }
+    let sections = node_lists
+        .iter()
+        .zip(&lengths)
+        .map(|(l, &n)| {
+            let bits = store.block_bits.unwrap_or(lists::BLOCK_BITS);
+            let (flag, bytes) = lists::write(l, n as u32, bits);
+            let mut section = vec![mocap_decoder::pattern::FLAG_SHARED | flag];
+            section.extend(bytes);
+            section
+        })
+        .collect();
     Ok(Shared {
         database,
         sections,
@@ -370,7 +385,7 @@ fn write_node(out: &mut Vec<u8>, channels: &[usize], np: &NodePatterns, layout: 
 }
 
 /// What `mocap info` shows of a `pattern` section.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SectionInfo {
     /// Per node: channels, segments, patterns, pattern samples (all
     /// channels), bytes of its database record.
@@ -386,24 +401,63 @@ pub struct SectionInfo {
     /// pattern at its largest code's bit length (layout 2, without its
     /// columns' padding to whole bytes).
     pub packed_bytes: usize,
+    /// Bytes of the segment lists (with their tables if coded).
+    pub lists_bytes: usize,
+    /// Whether the lists are entropy coded (§11.1b).
+    pub coded_lists: bool,
+    /// Coded lists: their bytes taken apart, beside the values' entropy.
+    pub lists: Option<lists::Report>,
 }
 
 /// Reads the sizes of a `pattern` section (`None` if it does not parse,
 /// or its database is a shared model section: see [`inspect_database`]).
 pub fn inspect(section: &[u8]) -> Option<SectionInfo> {
-    if *section.first()? != 0 {
+    let flags = *section.first()?;
+    if flags & mocap_decoder::pattern::FLAG_SHARED != 0 {
         return None;
     }
     let mut info = inspect_database(&section[1..])?;
-    let mut at = 1 + info.database_len;
-    for node in &mut info.nodes {
-        let n = usize::from(u16::from_le_bytes(
-            section.get(at..at + 2)?.try_into().ok()?,
-        ));
-        node[1] = n;
-        at += 2 + n * 6;
+    let lists = section.get(1 + info.database_len..)?;
+    info.lists_bytes = lists.len();
+    info.coded_lists = flags & mocap_decoder::pattern::FLAG_CODED != 0;
+    let mut at = 0;
+    let mut tables = Vec::new();
+    if info.coded_lists {
+        for _ in 0..2 {
+            let (t, len) = mocap_decoder::entropy::Table::parse(lists.get(at..)?).ok()?;
+            tables.push(t);
+            at += len;
+        }
     }
-    (at == section.len()).then_some(info)
+    let (mut node_lists, mut frames) = (Vec::new(), 0);
+    let bits = lists.get(at + 2).copied().unwrap_or(0);
+    for node in &mut info.nodes {
+        let (n, len) = if let [lengths, patterns] = tables[..] {
+            let mut l = lists::NodeList::default();
+            mocap_decoder::pattern::for_each_coded_segment(
+                lists,
+                at,
+                lengths,
+                patterns,
+                |start, end, p| {
+                    l.starts.push(start);
+                    l.patterns.push(p as u16);
+                    frames = end;
+                },
+            )?;
+            node_lists.push(l);
+            mocap_decoder::pattern::coded_extent(lists, at)?
+        } else {
+            let n = usize::from(u16::from_le_bytes(lists.get(at..at + 2)?.try_into().ok()?));
+            (n, 2 + n * 6)
+        };
+        node[1] = n;
+        at += len;
+    }
+    if info.coded_lists {
+        info.lists = lists::report(&node_lists, frames, bits).ok();
+    }
+    (at == lists.len()).then_some(info)
 }
 
 /// Reads the sizes of a pattern database (§11.2): a shared model section,
@@ -447,6 +501,7 @@ pub fn inspect_database(db: &[u8]) -> Option<SectionInfo> {
         layout: *db.get(1)?,
         code_bytes,
         packed_bytes: packed_bits.div_ceil(8),
+        ..SectionInfo::default()
     })
 }
 
@@ -508,6 +563,26 @@ impl SectionInfo {
                 .get(usize::from(self.layout))
                 .unwrap_or(&"?")
         );
+        match &self.lists {
+            Some(r) => {
+                s += &format!(
+                    "  segment lists: {} B rANS-coded (plain {} B): tables {} B, counts and block \
+                     index {} B, streams {} B; the values' Shannon entropy: lengths {:.0} B, \
+                     patterns {:.0} B\n",
+                    r.coded,
+                    r.plain,
+                    r.tables,
+                    r.index,
+                    r.streams,
+                    r.shannon_lengths,
+                    r.shannon_patterns
+                );
+            }
+            None if self.lists_bytes > 0 => {
+                s += &format!("  segment lists: {} B (plain)\n", self.lists_bytes);
+            }
+            None => {}
+        }
         if self.code_bytes > 0 {
             s += &format!(
                 "  codes: {} B bit-packed at each pattern's channel widths, {} B in whole bytes\n",
