@@ -111,6 +111,27 @@ impl<'a> Table<'a> {
         Ok((table, r.pos().wrapping_sub(counts.len()).wrapping_add(used)))
     }
 
+    /// A table [`Table::parse`] accepted, read again from its bytes (`bytes`
+    /// exactly its bytes) in a few steps — its head, its alphabet and its
+    /// first count — for codecs that keep only where their tables lie
+    /// between calls: the same table as `parse` gave. On bytes that were
+    /// never validated it gives some table, never a panic.
+    pub fn reread(bytes: &'a [u8]) -> Table<'a> {
+        let mut r = Reader::new(bytes);
+        let head = r.u8().unwrap_or(0);
+        let precision = u32::from(head & 0x0f);
+        let alphabet = r.varint_u32().unwrap_or(1).clamp(1, MAX_ALPHABET);
+        let m = 1u32 << precision;
+        let mut scan = Scan::new(r.rest(), u32::from(head >> 4), m);
+        let count0 = if alphabet > 1 { scan.next() } else { m };
+        Table {
+            precision,
+            alphabet,
+            count0,
+            after0: scan,
+        }
+    }
+
     /// `n` (`M = 2^n`).
     pub fn precision(&self) -> u32 {
         self.precision
@@ -534,6 +555,29 @@ mod tests {
         assert_eq!(t.find(1), (0, 0, 2));
         assert_eq!(t.find(2), (1, 2, 1));
         assert_eq!(t.find(3), (2, 3, 1));
+    }
+
+    /// [`Table::reread`] of a validated table's bytes is the table
+    /// [`Table::parse`] gave: every slot finds the same symbol.
+    #[test]
+    fn rereading_a_table_gives_the_parsed_table() {
+        // §10.6's table (A = 4, M = 8), this module's, one symbol, and
+        // one with zero counts after the first.
+        let tables: [&[u8]; 4] = [
+            &[0x33, 0x04, 0x2d],
+            &TABLE,
+            &[0x10, 0x01],
+            &[0x11, 0x06, 0x11],
+        ];
+        for bytes in tables {
+            let (t, used) = Table::parse(bytes).unwrap();
+            assert_eq!(used, bytes.len());
+            let r = Table::reread(bytes);
+            assert_eq!((r.precision(), r.alphabet()), (t.precision(), t.alphabet()));
+            for slot in 0..1u32 << t.precision() {
+                assert_eq!(r.find(slot), t.find(slot), "{bytes:02x?} slot {slot}");
+            }
+        }
     }
 
     #[test]

@@ -16,11 +16,12 @@ use core::num::NonZeroU32;
 /// less room the same values are decoded, more slowly — or the
 /// `predictive` codec's two frames, contexts, probabilities and coder
 /// (`3·C + 19` words; a smaller `N` is refused), or the `pattern` codec's
-/// second frame while `sample_at` mixes two (`C` words), then 9 words per
-/// node, its place in the database and its last segment (with less room
-/// every node searches its segment list each frame) — so
-/// `size_of::<Player<N>>()` is `4·N + 176` bytes on a 32-bit MCU
-/// (measured on thumbv7m by the example firmware; BENCHMARKS.md).
+/// second frame while `sample_at` mixes two (`C` words), then 12 words per
+/// node, its place in the database, its last segment and, for coded segment
+/// lists, the list's stream state after it (with less room every node
+/// searches its segment list each frame) — so `size_of::<Player<N>>()` is
+/// `4·N + 248` bytes on a 32-bit MCU (measured on thumbv7m by the example
+/// firmware, 1 528 B for its `N = 320`; BENCHMARKS.md).
 /// Output goes into the caller's slice, in the units of the channel table.
 #[derive(Clone, Debug)]
 // Declaration order: the words every call reads first, within reach of the

@@ -68,8 +68,10 @@ pub(crate) struct PatternCodec<'a> {
     frames: u32,
     /// The records' layout: [`LAYOUT_ROWS`] or [`LAYOUT_COLUMNS`] (§11.2).
     layout: u8,
-    /// Coded segment lists (§11.1b): their two tables.
-    tables: Option<Tables<'a>>,
+    /// Coded segment lists (§11.1b): the bytes of their two tables
+    /// (validated by [`PatternCodec::parse`], read again where needed:
+    /// two slices in the player, not two parsed tables).
+    tables: Option<(&'a [u8], &'a [u8])>,
 }
 
 /// One node of the database.
@@ -309,20 +311,20 @@ impl<'a> PatternCodec<'a> {
         } else {
             rest.get(len..).unwrap_or(&[])
         };
-        let (tables, segments) = if flags & FLAG_CODED != 0 {
+        let (tables, checked, segments) = if flags & FLAG_CODED != 0 {
             let (lengths, a) = Table::parse(segments)?;
-            let rest = segments.get(a..).unwrap_or(&[]);
+            let (l, rest) = segments.split_at_checked(a).unwrap_or((&[], &[]));
             let (patterns, b) = Table::parse(rest)?;
-            let t = Tables { lengths, patterns };
-            (Some(t), rest.get(b..).unwrap_or(&[]))
+            let (p, rest) = rest.split_at_checked(b).unwrap_or((&[], &[]));
+            (Some((l, p)), Some(Tables { lengths, patterns }), rest)
         } else {
-            (None, segments)
+            (None, None, segments)
         };
         let mut r = Reader::new(nodes);
         let mut s = Reader::new(segments);
         for _ in 0..node_count {
             let node = read_node(&mut r, layout).ok_or(malformed("database truncated"))?;
-            if let Some(t) = &tables {
+            if let Some(t) = &checked {
                 if segments.get(s.pos().wrapping_add(2)) > Some(&MAX_BLOCK_BITS) {
                     return Err(malformed("a block size over 2^15 segments"));
                 }
@@ -452,8 +454,12 @@ impl<'a> PatternCodec<'a> {
     fn advance(&self, c: &mut [i32; CURSOR_WORDS], f: u32) -> Option<()> {
         let node = NodeAt::read(self.nodes, c[NODE_AT] as u32 as usize, self.layout)?;
         let s = c[LIST_AT] as u32 as usize;
-        if let Some(t) = &self.tables {
-            return self.advance_coded(c, f, &node, s, t);
+        if let Some((l, p)) = self.tables {
+            let t = Tables {
+                lengths: Table::reread(l),
+                patterns: Table::reread(p),
+            };
+            return self.advance_coded(c, f, &node, s, &t);
         }
         let count = usize::from(u16_at(self.segments, s)?);
         let list_at = s.wrapping_add(2);
