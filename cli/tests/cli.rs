@@ -539,6 +539,64 @@ fn tiny_c3d() -> Vec<u8> {
     b
 }
 
+/// `--target` on a marker file without `--codec` tries every codec the cost
+/// model knows and keeps the smallest clip that fits the chip; the clip
+/// written is that candidate's and still flags its missing sample.
+#[test]
+fn a_c3d_marker_file_with_a_target_tries_every_codec() {
+    let d = out_dir("c3d-target");
+    let c3d = d.join("tiny.c3d");
+    std::fs::write(&c3d, tiny_c3d()).expect("write");
+    let (c3d, clip) = (c3d.to_str().unwrap(), d.join("tiny.mcb"));
+    let clip = clip.to_str().unwrap();
+    let o = mocap(&[
+        "encode",
+        c3d,
+        "-o",
+        clip,
+        "--max-error",
+        "2mm",
+        "--target",
+        "microbit",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    for label in ["index ", "index-fast", "pca-spline", "predictive", "rma "] {
+        assert!(out.contains(&format!("  {label}")), "{label}: {out}");
+    }
+    let chosen = out
+        .lines()
+        .find(|l| l.ends_with("[chosen]"))
+        .unwrap_or_else(|| panic!("a chosen clip: {out}"));
+    let bytes: usize = chosen.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert_eq!(
+        std::fs::metadata(clip).unwrap().len() as usize,
+        bytes,
+        "{out}"
+    );
+    let o = mocap(&["info", clip]);
+    assert!(
+        text(&o.stdout).contains("missing samples: 1 of 8"),
+        "{}",
+        text(&o.stdout)
+    );
+    // `--codec` keeps the one codec, checked against the chip.
+    let o = mocap(&[
+        "encode",
+        c3d,
+        "-o",
+        clip,
+        "--max-error",
+        "2mm",
+        "--target",
+        "microbit",
+        "--codec",
+        "index",
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(!text(&o.stdout).contains("[chosen]"), "{}", text(&o.stdout));
+}
+
 #[test]
 fn encode_info_eval_a_c3d_marker_file() {
     let d = out_dir("c3d");

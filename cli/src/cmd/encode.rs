@@ -187,10 +187,16 @@ pub fn run(a: Args) -> super::Result {
         );
     }
     if super::markers::is_marker_file(&a.input) {
-        encode_markers(&a, &specs)?;
+        if a.rig.is_some() {
+            return Err("--rig needs a skeleton: a C3D marker file has none".into());
+        }
         return match chip {
-            Some(c) => check_cost(&std::fs::read(&a.output)?, c, &budget),
-            None => Ok(()),
+            Some(c) if a.codec.is_none() => encode_markers_for(&a, &specs, c, &budget),
+            Some(c) => {
+                encode_markers(&a, &specs)?;
+                check_cost(&std::fs::read(&a.output)?, c, &budget)
+            }
+            None => encode_markers(&a, &specs),
         };
     }
     let input = a.motion.read(&a.input)?;
@@ -373,6 +379,16 @@ fn encode_for(
         })
         .collect();
     bar.finish();
+    choose_for(results, chip, budget)
+}
+
+/// Judges every candidate clip on `chip` under `budget`, prints them and
+/// returns the smallest that fits.
+fn choose_for<E: std::fmt::Display>(
+    results: Vec<(&'static str, Result<encode::Encoded, E>)>,
+    chip: &'static Chip,
+    budget: &Budget,
+) -> super::Result<encode::Encoded> {
     let (candidates, best) = target::choose(results, chip, budget);
     println!(
         "{} ({}, {} MHz, {} KB flash, {} KB RAM), budget {budget}:",
@@ -437,17 +453,46 @@ fn encode_for(
 /// `mocap encode markers.c3d`: a marker clip (no rig: a marker file has no
 /// skeleton to drive one).
 fn encode_markers(a: &Args, specs: &[BoundSpec]) -> super::Result {
-    if a.rig.is_some() {
-        return Err("--rig needs a skeleton: a C3D marker file has none".into());
-    }
     // The smallest clips, and the one codec whose 12-bit-free residuals meet
     // the default 1 mm over metres of walking (`index` stops near 2 mm there).
     let codec = a.codec.map_or(CodecChoice::Predictive, Into::into);
     let bytes = super::markers::encode(&a.input, &a.units, specs, codec, a.key_interval)?;
-    write(&a.output, &bytes)?;
+    write_marker_clip(a, &bytes)
+}
+
+/// `mocap encode markers.c3d --target CHIP` without `--codec`: every codec
+/// the cost model knows makes a marker clip (`index` in both layouts), and
+/// the smallest that fits the chip and the budget is written.
+fn encode_markers_for(
+    a: &Args,
+    specs: &[BoundSpec],
+    chip: &'static Chip,
+    budget: &Budget,
+) -> super::Result {
+    let variants: Vec<(CodecChoice, IndexLayout)> = target::CANDIDATE_CODECS
+        .iter()
+        .flat_map(|&codec| match (codec, a.index_layout) {
+            (CodecChoice::Index, None) => IndexLayout::ALL.map(|l| (codec, l)).to_vec(),
+            (_, l) => vec![(codec, l.unwrap_or_default())],
+        })
+        .collect();
+    let results =
+        super::markers::encode_each(&a.input, &a.units, specs, &variants, a.key_interval)?
+            .into_iter()
+            .map(|((codec, layout), r)| {
+                (target::candidate_label(codec, layout), r.map(|e| e.encoded))
+            })
+            .collect();
+    let best = choose_for(results, chip, budget)?;
+    write_marker_clip(a, &best.bytes)
+}
+
+/// Writes a marker clip (and its source file with `--emit`).
+fn write_marker_clip(a: &Args, bytes: &[u8]) -> super::Result {
+    write(&a.output, bytes)?;
     println!("wrote {}", a.output.display());
     if let Some(kind) = a.emit {
-        let p = emit_source(kind, &a.output, &bytes)?;
+        let p = emit_source(kind, &a.output, bytes)?;
         eprintln!("wrote {}", p.display());
     }
     Ok(())

@@ -5,8 +5,9 @@
 use std::path::Path;
 
 use mocap_encoder::c3d::{self, UnitSource};
+use mocap_encoder::codec::index::IndexLayout;
 use mocap_encoder::encode::{Bound, BoundSpec, EncodeOptions};
-use mocap_encoder::markers::{self, MarkerClip, MissingMask};
+use mocap_encoder::markers::{self, EncodedMarkers, MarkerClip, MarkerError, MissingMask};
 use mocap_encoder::units::LengthUnit;
 use mocap_encoder::{clipfile, codec::CodecChoice};
 
@@ -93,6 +94,51 @@ pub fn encode(
         pattern: Default::default(),
     };
     let enc = markers::encode_markers(&clip, &opts)?;
+    print_summary(&enc, &opts.bound);
+    Ok(enc.encoded.bytes)
+}
+
+/// One codec's (and `index` layout's) marker clip, or why it could not
+/// make one.
+pub type MarkerAttempt = (
+    (CodecChoice, IndexLayout),
+    Result<EncodedMarkers, MarkerError>,
+);
+
+/// Each codec and `index` layout of `variants` coding the marker file
+/// (read once), for `--target`'s choice: the marker clips, or why a codec
+/// could not make one.
+pub fn encode_each(
+    input: &Path,
+    units: &UnitArg,
+    specs: &[BoundSpec],
+    variants: &[(CodecChoice, IndexLayout)],
+    key_interval: Option<u16>,
+) -> super::Result<Vec<MarkerAttempt>> {
+    let bound = bound(specs)?;
+    let (clip, unit) = read(input, units)?;
+    eprintln!(
+        "encoding with each codec (bound {bound}; missing samples filled for coding, flagged in the clip)…"
+    );
+    Ok(variants
+        .iter()
+        .map(|&(codec, index_layout)| {
+            let opts = EncodeOptions {
+                key_bits: None,
+                codec,
+                bound,
+                metres_per_unit: unit.metres(),
+                key_interval,
+                index_layout,
+                pattern: Default::default(),
+            };
+            ((codec, index_layout), markers::encode_markers(&clip, &opts))
+        })
+        .collect())
+}
+
+/// The line `mocap encode` prints for a marker clip.
+fn print_summary(enc: &EncodedMarkers, bound: &Bound) {
     let x = &enc.error;
     println!(
         "{} bytes, ratio {:.2}:1 vs f32, marker error max {:.2} mm ({} at frame {}), ARMS {:.2} mm, RMS {:.2} mm over {} present samples; {} missing samples flagged (bound {bound} holds on the present samples; {})",
@@ -107,7 +153,6 @@ pub fn encode(
         x.missing,
         enc.encoded.codec.name()
     );
-    Ok(enc.encoded.bytes)
 }
 
 /// `mocap eval markers.c3d clip.mcb`: marker position error over the present

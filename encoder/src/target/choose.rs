@@ -6,7 +6,7 @@ use super::chips::Chip;
 use super::cost::{predict_capacities, CodecKind, Cost};
 use crate::codec::index::IndexLayout;
 use crate::codec::CodecChoice;
-use crate::encode::{EncodeError, Encoded};
+use crate::encode::Encoded;
 
 /// One codec's clip, judged.
 #[derive(Debug)]
@@ -14,7 +14,7 @@ pub struct Candidate {
     /// The codec and layout (`index`, `index-fast`, `pca-spline`, …).
     pub label: &'static str,
     /// The clip, or why the codec could not make one within the bound.
-    pub encoded: Result<Encoded, EncodeError>,
+    pub encoded: Result<Encoded, String>,
     /// Predicted cost on the chip (or why there is none), for the player
     /// capacity chosen: of those that fit, the fewest instructions; the
     /// largest when none fits.
@@ -58,14 +58,15 @@ pub fn best_capacity(costs: Vec<Cost>, budget: &Budget) -> Result<Cost, String> 
 
 /// Judges every codec's result on `chip` under `budget`; returns them with
 /// the index of the smallest clip that fits (the first of equal sizes).
-pub fn choose(
-    results: impl IntoIterator<Item = (&'static str, Result<Encoded, EncodeError>)>,
+pub fn choose<E: std::fmt::Display>(
+    results: impl IntoIterator<Item = (&'static str, Result<Encoded, E>)>,
     chip: &'static Chip,
     budget: &Budget,
 ) -> (Vec<Candidate>, Option<usize>) {
     let candidates: Vec<Candidate> = results
         .into_iter()
         .map(|(label, encoded)| {
+            let encoded = encoded.map_err(|e| e.to_string());
             let cost = match &encoded {
                 Ok(e) => predict_capacities(&e.bytes, chip)
                     .map_err(|e| e.to_string())
@@ -99,7 +100,7 @@ mod tests {
     use crate::target::{chip, Features};
 
     /// Every codec's clip of the demo, `index` in both layouts.
-    fn results() -> Vec<(&'static str, Result<Encoded, EncodeError>)> {
+    fn results() -> Vec<(&'static str, Result<Encoded, crate::encode::EncodeError>)> {
         let m = animatronic_demo();
         CANDIDATE_CODECS
             .iter()
