@@ -497,6 +497,16 @@ fn encode_and_eval_an_amc() {
 }
 
 /// A tiny Intel C3D file (integer data, scale 0.1 mm, 100 Hz): markers
+/// A test directory `name` holding [`tiny_c3d`] as `tiny.c3d`: the
+/// directory, that file and the clip path `tiny.mcb` beside it.
+fn tiny_c3d_in(name: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let d = out_dir(name);
+    let c3d = d.join("tiny.c3d");
+    std::fs::write(&c3d, tiny_c3d()).expect("write");
+    let clip = d.join("tiny.mcb");
+    (d, c3d, clip)
+}
+
 /// `LHEE` and `RHEE` over four frames, `RHEE` missing at frame 2.
 fn tiny_c3d() -> Vec<u8> {
     let u16s = |b: &mut Vec<u8>, v: &[u16]| v.iter().for_each(|x| b.extend(x.to_le_bytes()));
@@ -544,11 +554,8 @@ fn tiny_c3d() -> Vec<u8> {
 /// written is that candidate's and still flags its missing sample.
 #[test]
 fn a_c3d_marker_file_with_a_target_tries_every_codec() {
-    let d = out_dir("c3d-target");
-    let c3d = d.join("tiny.c3d");
-    std::fs::write(&c3d, tiny_c3d()).expect("write");
-    let (c3d, clip) = (c3d.to_str().unwrap(), d.join("tiny.mcb"));
-    let clip = clip.to_str().unwrap();
+    let (_, c3d, clip) = tiny_c3d_in("c3d-target");
+    let (c3d, clip) = (c3d.to_str().unwrap(), clip.to_str().unwrap());
     let o = mocap(&[
         "encode",
         c3d,
@@ -599,11 +606,8 @@ fn a_c3d_marker_file_with_a_target_tries_every_codec() {
 
 #[test]
 fn encode_info_eval_a_c3d_marker_file() {
-    let d = out_dir("c3d");
-    let c3d = d.join("tiny.c3d");
-    std::fs::write(&c3d, tiny_c3d()).expect("write");
-    let (c3d, clip) = (c3d.to_str().unwrap(), d.join("tiny.mcb"));
-    let clip = clip.to_str().unwrap();
+    let (d, c3d, clip) = tiny_c3d_in("c3d");
+    let (c3d, clip) = (c3d.to_str().unwrap(), clip.to_str().unwrap());
     let o = mocap(&["encode", c3d, "-o", clip, "--max-error", "2mm"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);

@@ -358,13 +358,7 @@ fn encode_for(
     } else {
         vec![opts.codec]
     };
-    let variants: Vec<(CodecChoice, IndexLayout)> = codecs
-        .iter()
-        .flat_map(|&codec| match (codec, layout) {
-            (CodecChoice::Index, None) => IndexLayout::ALL.map(|l| (codec, l)).to_vec(),
-            (_, l) => vec![(codec, l.unwrap_or_default())],
-        })
-        .collect();
+    let variants = variants(&codecs, layout);
     let bar = crate::progress::Bar::new(variants.len());
     let results: Vec<_> = variants
         .iter()
@@ -380,6 +374,21 @@ fn encode_for(
         .collect();
     bar.finish();
     choose_for(results, chip, budget)
+}
+
+/// The codecs to try for a chip, `index` in both layouts unless `layout`
+/// fixes one.
+fn variants(
+    codecs: &[CodecChoice],
+    layout: Option<IndexLayout>,
+) -> Vec<(CodecChoice, IndexLayout)> {
+    codecs
+        .iter()
+        .flat_map(|&codec| match (codec, layout) {
+            (CodecChoice::Index, None) => IndexLayout::ALL.map(|l| (codec, l)).to_vec(),
+            (_, l) => vec![(codec, l.unwrap_or_default())],
+        })
+        .collect()
 }
 
 /// Judges every candidate clip on `chip` under `budget`, prints them and
@@ -469,13 +478,7 @@ fn encode_markers_for(
     chip: &'static Chip,
     budget: &Budget,
 ) -> super::Result {
-    let variants: Vec<(CodecChoice, IndexLayout)> = target::CANDIDATE_CODECS
-        .iter()
-        .flat_map(|&codec| match (codec, a.index_layout) {
-            (CodecChoice::Index, None) => IndexLayout::ALL.map(|l| (codec, l)).to_vec(),
-            (_, l) => vec![(codec, l.unwrap_or_default())],
-        })
-        .collect();
+    let variants = variants(&target::CANDIDATE_CODECS, a.index_layout);
     let results =
         super::markers::encode_each(&a.input, &a.units, specs, &variants, a.key_interval)?
             .into_iter()

@@ -84,15 +84,7 @@ pub fn encode(
     let bound = bound(specs)?;
     let (clip, unit) = read(input, units)?;
     eprintln!("encoding ({codec:?}, bound {bound}; missing samples filled for coding, flagged in the clip)…");
-    let opts = EncodeOptions {
-        key_bits: None,
-        codec,
-        bound,
-        metres_per_unit: unit.metres(),
-        key_interval,
-        index_layout: Default::default(),
-        pattern: Default::default(),
-    };
+    let opts = options(codec, Default::default(), bound, unit, key_interval);
     let enc = markers::encode_markers(&clip, &opts)?;
     print_summary(&enc, &opts.bound);
     Ok(enc.encoded.bytes)
@@ -123,18 +115,29 @@ pub fn encode_each(
     Ok(variants
         .iter()
         .map(|&(codec, index_layout)| {
-            let opts = EncodeOptions {
-                key_bits: None,
-                codec,
-                bound,
-                metres_per_unit: unit.metres(),
-                key_interval,
-                index_layout,
-                pattern: Default::default(),
-            };
+            let opts = options(codec, index_layout, bound, unit, key_interval);
             ((codec, index_layout), markers::encode_markers(&clip, &opts))
         })
         .collect())
+}
+
+/// The encoder's options for a marker clip.
+fn options(
+    codec: CodecChoice,
+    index_layout: IndexLayout,
+    bound: Bound,
+    unit: LengthUnit,
+    key_interval: Option<u16>,
+) -> EncodeOptions {
+    EncodeOptions {
+        key_bits: None,
+        codec,
+        bound,
+        metres_per_unit: unit.metres(),
+        key_interval,
+        index_layout,
+        pattern: Default::default(),
+    }
 }
 
 /// The line `mocap encode` prints for a marker clip.

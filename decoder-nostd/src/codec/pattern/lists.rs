@@ -73,6 +73,7 @@ impl<'a> CodedList<'a> {
         let blocks = count.wrapping_add((1usize << bits).wrapping_sub(1)) >> bits;
         let index_len = blocks.checked_mul(BLOCK)?;
         let index = b.get(3..index_len.checked_add(3)?)?;
+        // The last block's end (its index entry's last field).
         let streams_len = match blocks.checked_sub(1) {
             Some(last) => u32_at(index, last.wrapping_mul(BLOCK).wrapping_add(6))? as usize,
             None => 0,
@@ -92,16 +93,21 @@ impl<'a> CodedList<'a> {
         self.index.len() / BLOCK
     }
 
+    /// Where block `k`'s stream ends in the streams.
+    fn block_end(&self, k: usize) -> Option<usize> {
+        Some(u32_at(self.index, k.wrapping_mul(BLOCK).wrapping_add(6))? as usize)
+    }
+
     /// Block `k`'s start frame, first pattern and stream bytes `from..to`.
     fn block(&self, k: usize) -> Option<(u32, u32, usize, usize)> {
         let at = k.wrapping_mul(BLOCK);
         let start = u32_at(self.index, at)?;
         let &[p0, p1] = self.index.get(at.wrapping_add(4)..)?.first_chunk::<2>()?;
-        let to = u32_at(self.index, at.wrapping_add(6))? as usize;
         let from = match k.checked_sub(1) {
-            Some(j) => u32_at(self.index, j.wrapping_mul(BLOCK).wrapping_add(6))? as usize,
+            Some(j) => self.block_end(j)?,
             None => 0,
         };
+        let to = self.block_end(k)?;
         Some((start, u32::from(u16::from_le_bytes([p0, p1])), from, to))
     }
 
@@ -135,7 +141,7 @@ impl<'a> CodedList<'a> {
         if i & mask == 0 || i >= self.count {
             return None;
         }
-        let (_, _, _, to) = self.block(s.i >> self.bits)?;
+        let to = self.block_end(s.i >> self.bits)?;
         let rest = self.streams.get(s.pos..to)?;
         let mut dec = Decoder::resume(t.lengths, s.x, rest);
         let d = unzigzag(dec.value_of(&t.patterns));
@@ -208,7 +214,8 @@ impl<'a> CodedList<'a> {
             }
             loop {
                 let n = s.end.wrapping_sub(s.start);
-                if n == 0 || n > super::MAX_SEGMENT || s.end < s.start || s.end > frames {
+                // `n` wraps above 65 535 if `end < start`.
+                if n == 0 || n > super::MAX_SEGMENT || s.end > frames {
                     return Err(malformed(
                         "a segment of 0 or over 65535 frames, or past the last frame",
                     ));

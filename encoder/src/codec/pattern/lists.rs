@@ -56,14 +56,19 @@ fn pattern_value(p: u16, q: u16) -> u32 {
     ((d << 1) ^ (d >> 63)) as u32
 }
 
+/// Segment `i`'s length − 1 (the last one ends at `frames`).
+fn length_value(l: &NodeList, i: usize, frames: u32) -> u32 {
+    let end = l.starts.get(i + 1).copied().unwrap_or(frames);
+    end - l.starts[i] - 1
+}
+
 /// Each segment's length − 1, and the pattern values of the segments that
 /// are not a block's first, over all nodes.
 fn values(lists: &[NodeList], frames: u32, bits: u8) -> (Vec<u32>, Vec<u32>) {
     let (mut lengths, mut patterns) = (Vec::new(), Vec::new());
     for l in lists {
-        for (i, &s) in l.starts.iter().enumerate() {
-            let end = l.starts.get(i + 1).copied().unwrap_or(frames);
-            lengths.push(end - s - 1);
+        for i in 0..l.starts.len() {
+            lengths.push(length_value(l, i, frames));
             if i % (1usize << bits) != 0 {
                 patterns.push(pattern_value(l.patterns[i], l.patterns[i - 1]));
             }
@@ -72,15 +77,29 @@ fn values(lists: &[NodeList], frames: u32, bits: u8) -> (Vec<u32>, Vec<u32>) {
     (lengths, patterns)
 }
 
+/// The lengths' and the pattern values' tables.
+fn models(lengths: &[u32], patterns: &[u32]) -> Result<(Model, Model), EntropyError> {
+    let (len_model, _) = Model::fit_values_best(lengths)?;
+    // No pattern values (every block one segment): any table does.
+    let (pat_model, _) = Model::fit_values_best(if patterns.is_empty() { &[0] } else { patterns })?;
+    Ok((len_model, pat_model))
+}
+
 /// The coded form (§11.1b) with blocks of `2^bits` segments: the lengths'
 /// and the patterns' tables, then per node its count, `bits`, the block
 /// index and the blocks' streams.
 pub fn coded(lists: &[NodeList], frames: u32, bits: u8) -> Result<Vec<u8>, EntropyError> {
     let (lengths, patterns) = values(lists, frames, bits);
-    let (len_model, _) = Model::fit_values_best(&lengths)?;
-    // No pattern values (every block one segment): any table does.
-    let (pat_model, _) =
-        Model::fit_values_best(if patterns.is_empty() { &[0] } else { &patterns })?;
+    coded_with(lists, frames, bits, &models(&lengths, &patterns)?)
+}
+
+/// [`coded`] with its two tables.
+fn coded_with(
+    lists: &[NodeList],
+    frames: u32,
+    bits: u8,
+    (len_model, pat_model): &(Model, Model),
+) -> Result<Vec<u8>, EntropyError> {
     let mut out = len_model.table_bytes();
     out.extend(pat_model.table_bytes());
     let block = 1usize << bits;
@@ -92,14 +111,12 @@ pub fn coded(lists: &[NodeList], frames: u32, bits: u8) -> Result<Vec<u8>, Entro
         for (k, chunk) in l.starts.chunks(block).enumerate() {
             let first = k * block;
             let mut steps: Vec<Step> = Vec::new();
-            for (j, &s) in chunk.iter().enumerate() {
-                let i = first + j;
-                if j > 0 {
+            for i in first..first + chunk.len() {
+                if i > first {
                     let v = pattern_value(l.patterns[i], l.patterns[i - 1]);
                     pat_model.push_value_steps(&mut steps, v)?;
                 }
-                let end = l.starts.get(i + 1).copied().unwrap_or(frames);
-                len_model.push_value_steps(&mut steps, end - s - 1)?;
+                len_model.push_value_steps(&mut steps, length_value(l, i, frames))?;
             }
             streams.extend(encode_steps(&steps));
             index.extend(chunk[0].to_le_bytes());
@@ -110,6 +127,55 @@ pub fn coded(lists: &[NodeList], frames: u32, bits: u8) -> Result<Vec<u8>, Entro
         out.extend(streams);
     }
     Ok(out)
+}
+
+/// What a coded list costs, beside the Shannon entropy of its values.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// Segments over all nodes.
+    pub segments: usize,
+    /// Bytes of the plain form.
+    pub plain: usize,
+    /// Bytes of the coded form, in all.
+    pub coded: usize,
+    /// Of which the two tables.
+    pub tables: usize,
+    /// Of which the nodes' counts, block sizes and block indexes.
+    pub index: usize,
+    /// Of which the streams (states and renormalisation bytes).
+    pub streams: usize,
+    /// The lengths' and the pattern values' Shannon entropy (each value
+    /// its own symbol, the empirical distribution), bytes.
+    pub shannon_lengths: f64,
+    /// See `shannon_lengths`.
+    pub shannon_patterns: f64,
+}
+
+/// The coded form of `lists` in blocks of `2^bits` segments taken apart
+/// ([`Report`]).
+pub fn report(lists: &[NodeList], frames: u32, bits: u8) -> Result<Report, EntropyError> {
+    let (lengths, patterns) = values(lists, frames, bits);
+    let shannon =
+        |v: &[u32]| crate::entropy::shannon_bits(&crate::entropy::histogram(v)) / 8.0 + 0.0;
+    let m = models(&lengths, &patterns)?;
+    let coded = coded_with(lists, frames, bits, &m)?;
+    let tables = m.0.table_bytes().len() + m.1.table_bytes().len();
+    let segments: usize = lists.iter().map(|l| l.starts.len()).sum();
+    let blocks: usize = lists
+        .iter()
+        .map(|l| l.starts.len().div_ceil(1 << bits))
+        .sum();
+    let index = lists.len() * 3 + blocks * 10;
+    Ok(Report {
+        segments,
+        plain: plain(lists).len(),
+        tables,
+        index,
+        streams: coded.len() - tables - index,
+        coded: coded.len(),
+        shannon_lengths: shannon(&lengths),
+        shannon_patterns: shannon(&patterns),
+    })
 }
 
 #[cfg(test)]
@@ -170,61 +236,4 @@ mod tests {
         assert_eq!(pattern_value(6, 4), 2);
         assert_eq!(pattern_value(0, 65535), 2 * 65536 - 1);
     }
-}
-
-/// What a coded list costs, beside the Shannon entropy of its values.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Report {
-    /// Segments over all nodes.
-    pub segments: usize,
-    /// Bytes of the plain form.
-    pub plain: usize,
-    /// Bytes of the coded form, in all.
-    pub coded: usize,
-    /// Of which the two tables.
-    pub tables: usize,
-    /// Of which the nodes' counts, block sizes and block indexes.
-    pub index: usize,
-    /// Of which the streams (states and renormalisation bytes).
-    pub streams: usize,
-    /// The lengths' and the pattern values' Shannon entropy (each value
-    /// its own symbol, the empirical distribution), bytes.
-    pub shannon_lengths: f64,
-    /// See `shannon_lengths`.
-    pub shannon_patterns: f64,
-}
-
-/// The coded form of `lists` in blocks of `2^bits` segments taken apart
-/// ([`Report`]).
-pub fn report(lists: &[NodeList], frames: u32, bits: u8) -> Result<Report, EntropyError> {
-    let (lengths, patterns) = values(lists, frames, bits);
-    let shannon = |v: &[u32]| {
-        let mut h = std::collections::HashMap::new();
-        for &x in v {
-            *h.entry(x).or_insert(0u64) += 1;
-        }
-        let hist: Vec<u64> = h.into_values().collect();
-        crate::entropy::shannon_bits(&hist) / 8.0 + 0.0
-    };
-    let coded = coded(lists, frames, bits)?;
-    let (len_model, _) = Model::fit_values_best(&lengths)?;
-    let (pat_model, _) =
-        Model::fit_values_best(if patterns.is_empty() { &[0] } else { &patterns })?;
-    let tables = len_model.table_bytes().len() + pat_model.table_bytes().len();
-    let segments: usize = lists.iter().map(|l| l.starts.len()).sum();
-    let blocks: usize = lists
-        .iter()
-        .map(|l| l.starts.len().div_ceil(1 << bits))
-        .sum();
-    let index = lists.len() * 3 + blocks * 10;
-    Ok(Report {
-        segments,
-        plain: plain(lists).len(),
-        tables,
-        index,
-        streams: coded.len() - tables - index,
-        coded: coded.len(),
-        shannon_lengths: shannon(&lengths),
-        shannon_patterns: shannon(&patterns),
-    })
 }
