@@ -13,7 +13,8 @@
 //! (`$MOCAP_STREAM=1`, `const STREAM`), the streaming mode's gap timeout
 //! (`$MOCAP_STREAM_TIMEOUT_MS`, default 500, `const STREAM_TIMEOUT_MS`) and the simulated e-stop
 //! (`$MOCAP_ESTOP_AT_TICK`, `const ESTOP_AT_TICK`), and the servo mode's power levels (`$MOCAP_POWER`,
-//! `mocap play --power`'s schedule, `const POWER`).
+//! `mocap play --power`'s schedule, `const POWER`). `$MOCAP_CLIP_SLOT=N` (`const CLIP_SLOT`)
+//! reserves N bytes of flash for a clip written into the ELF after the build (src/slot.rs).
 //!
 //! The figure — the rig file of the mechanism this firmware drives (`$MOCAP_FIGURE`, default
 //! `../assets/rigs/animatronic_demo.toml`) — becomes `OUT_DIR/figure.rs`: its rig table, its
@@ -168,6 +169,10 @@ fn main() {
     // The player's capacity in words (`Player<N>`; `pca-spline` caches what fits, `mocap encode
     // --target` picks it under a RAM budget): 320 unless `MOCAP_PLAYER_WORDS`.
     let player_words = whole_number("MOCAP_PLAYER_WORDS", 320);
+    // The clip slot (`MOCAP_CLIP_SLOT=N`, src/slot.rs): N bytes of flash that scripts/firmware.sh
+    // writes a clip into after the build, which then plays that clip instead of the embedded one;
+    // 0 (unset): the clip is embedded.
+    let clip_slot = whole_number("MOCAP_CLIP_SLOT", 0);
     if player_words == 0 {
         fail("mocap-firmware: MOCAP_PLAYER_WORDS must be at least 1");
     }
@@ -208,7 +213,9 @@ fn main() {
          /// Words of the player's state, `Player<N>` (`MOCAP_PLAYER_WORDS`, default 320).\n\
          pub const PLAYER_WORDS: usize = {player_words};\n\
          /// The servo mode's power levels (`MOCAP_POWER`): `(from_us, level)`; empty: level 0.\n\
-         pub const POWER: &[(u64, u8)] = &[{power}];\n"
+         pub const POWER: &[(u64, u8)] = &[{power}];\n\
+         /// Bytes of the clip slot (`MOCAP_CLIP_SLOT`, src/slot.rs); 0 embeds the clip.\n\
+         pub const CLIP_SLOT: usize = {clip_slot};\n"
     );
     write_if_changed(&out_dir.join("config.rs"), config.as_bytes());
 }

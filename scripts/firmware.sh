@@ -23,6 +23,9 @@
 #       Builds, then runs the ELF in QEMU headless: the UART on stdout, semihosting on. The exit
 #       code is the firmware's (0 = every frame decoded), 124 on timeout (default 300 s).
 #       --icount adds `-icount shift=0` so the instruction figures in the output are exact.
+#       Runs that do not measure (no --icount, --m0, --stream, --entropy-bench) of a clip up to
+#       64 KiB play it from the clip slot (firmware-example/src/slot.rs): one build per board and
+#       mode, the clip written into a copy of the ELF; MOCAP_FW_EMBED=1 embeds it instead.
 #       --figure RIG.toml sets the figure whose hard limits the firmware compiles in
 #       (MOCAP_FIGURE; default assets/rigs/animatronic_demo.toml), --policy
 #       refuse|clamp-if-inside|clamp what it does with a servo clip made for another rig
@@ -236,11 +239,55 @@ stage_inputs() {
     fi
 }
 
+# ---- the clip slot (firmware-example/src/slot.rs): `run` plays the clip from a build that does
+# not embed it — one build per board and mode, the clip (and the sampling period) written into the
+# ELF's reserved flash, with the servo output — unless it measures (--icount, --m0), streams, benches the entropy coder,
+# the clip is over SLOT_BYTES or MOCAP_FW_EMBED=1 asks for the embedding build. Rebuilding the
+# firmware for every clip was most of the QEMU tests' time (a build ~10 s, a run ~1 s).
+SLOT_BYTES=65536
+USE_SLOT=""
+if [ "$CMD" = run ] && [ "$ICOUNT" -eq 0 ] && [ -z "$STREAM$ENTROPY_BENCH$M0_ON_LM3S${MOCAP_FW_EMBED:-}" ] \
+    && [ -f "$CLIP" ] && [ "$(stat -c %s "$CLIP")" -le "$SLOT_BYTES" ]; then
+    USE_SLOT=1
+fi
+
+# le VALUE BYTES: VALUE as BYTES little-endian bytes on stdout.
+le() {
+    local v="$1" i
+    for ((i = 0; i < $2; i++)); do
+        # shellcheck disable=SC2059 # the format is the byte's octal escape
+        printf "\\$(printf %03o "$((v & 255))")"
+        v=$((v >> 8))
+    done
+}
+
+# slot_fill ELF: a copy of the slot build ELF with the clip and the sampling period in its slot;
+# prints the copy's path.
+slot_fill() {
+    local elf="$1" out at
+    out="$(mktemp "${elf%.elf}.XXXXXX")" || build_failed "cannot create a copy of $elf"
+    cp "$elf" "$out"
+    at="$(LC_ALL=C grep -obUaF 'MOCAP-CLIP-SLOT:' "$out" | cut -d: -f1)"
+    [[ "$at" =~ ^[0-9]+$ ]] || { rm -f "$out"; build_failed "no single clip slot in $elf"; }
+    local servo=0
+    case "$SERVO" in maestro) servo=1 ;; ssc32) servo=2 ;; pwm) servo=3 ;; pca9685) servo=4 ;; esac
+    { le "$(stat -c %s "$CLIP")" 4; le "$servo" 1; le 0 3; le "${SAMPLE_US:-0}" 8; cat "$CLIP"; } \
+        | dd of="$out" bs=4096 seek="$((at + 16))" oflag=seek_bytes conv=notrunc status=none \
+        || { rm -f "$out"; build_failed "cannot write the clip into $out"; }
+    printf '%s\n' "$out"
+}
+
 # ---- build: prints the ELF path
 build() {
-    local sha staged target_dir lock elf_dir elf figure_sha staged_figure
+    local sha staged target_dir lock elf_dir elf figure_sha staged_figure sample_us="$SAMPLE_US" servo="$SERVO"
     stage_inputs
     sha="$CLIP_SHA" staged="$STAGED_CLIP" figure_sha="$FIGURE_SHA" staged_figure="$STAGED_FIGURE"
+    if [ -n "$USE_SLOT" ]; then
+        # The same build for every clip: the shipped demo embedded (unused), no sampling period.
+        # The servo output too, unless --power (a build setting that needs it) is given.
+        sha="slot$SLOT_BYTES" staged="$FW/clips/demo.mcb" sample_us=""
+        [ -n "$POWER" ] || servo=""
+    fi
 
     mocap_toolchain_setup "$TARGET" >&2 || build_failed "toolchain setup failed (log: $MOCAP_TOOLCHAIN_LOG)"
     mocap_toolchain_summary >&2
@@ -250,7 +297,7 @@ build() {
     # not once per board; each board's code goes to the target's own subfolder.
     target_dir="$FW/target/fw"
     elf_dir="$FW/target/$BOARD/elf"
-    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${SAMPLE_US:+-s$SAMPLE_US}${SERVO:+-$SERVO}${STREAM:+-stream}${ENTROPY_BENCH:+-entropy}${PLAYER_WORDS:+-w$PLAYER_WORDS}${POWER:+-p$(printf %s "$POWER" | sha256sum | cut -c1-8)}${M0_ON_LM3S:+-m0}.elf"
+    elf="$elf_dir/mocap-firmware-$sha-f$figure_sha${POLICY:+-$POLICY}${STREAM_TIMEOUT:+-t$STREAM_TIMEOUT}${ESTOP_AT:+-e$ESTOP_AT}${sample_us:+-s$sample_us}${servo:+-$servo}${STREAM:+-stream}${ENTROPY_BENCH:+-entropy}${PLAYER_WORDS:+-w$PLAYER_WORDS}${POWER:+-p$(printf %s "$POWER" | sha256sum | cut -c1-8)}${M0_ON_LM3S:+-m0}.elf"
     mkdir -p "$elf_dir"
     lock="$FW/target/fw.lock"
     # One build at a time (cargo locks the shared target dir anyway); the ELF is copied out
@@ -258,7 +305,7 @@ build() {
     (
         flock -w 1800 9 || build_failed "timed out waiting for $lock"
         cd "$FW"
-        MOCAP_CLIP="$staged" MOCAP_SAMPLE_US="$SAMPLE_US" MOCAP_SERVO="$SERVO" MOCAP_STREAM="$STREAM" \
+        MOCAP_CLIP="$staged" MOCAP_CLIP_SLOT="${USE_SLOT:+$SLOT_BYTES}" MOCAP_SAMPLE_US="$sample_us" MOCAP_SERVO="$servo" MOCAP_STREAM="$STREAM" \
             MOCAP_FIGURE="$staged_figure" MOCAP_FIGURE_NAME="$FIGURE" MOCAP_POLICY="$POLICY" \
             MOCAP_STREAM_TIMEOUT_MS="$STREAM_TIMEOUT" MOCAP_ESTOP_AT_TICK="$ESTOP_AT" MOCAP_ENTROPY_BENCH="$ENTROPY_BENCH" \
             MOCAP_PLAYER_WORDS="$PLAYER_WORDS" MOCAP_POWER="$POWER" CARGO_TARGET_DIR="$target_dir" mocap_cargo "$TARGET" build --release --no-default-features \
@@ -442,6 +489,10 @@ case "$CMD" in
         build ;;
     run)
         ELF="$(build)"
+        if [ -n "$USE_SLOT" ]; then
+            ELF="$(slot_fill "$ELF")"
+            trap 'rm -f "$ELF"' EXIT
+        fi
         run_qemu "$ELF" ;;
     size)
         ELF="$(build)"

@@ -21,6 +21,7 @@ mod figure;
 mod servo;
 mod show;
 mod show_core;
+mod slot;
 mod stream;
 mod text;
 
@@ -39,14 +40,45 @@ const MAX_CHANNELS: usize = config::PLAYER_WORDS;
 /// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `clips/demo.mcb`).
 static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
 
+/// The clip this run plays: the one compiled in, or in a clip-slot build (`MOCAP_CLIP_SLOT`)
+/// the one written into the slot (`slot.rs`).
+fn clip_bytes() -> &'static [u8] {
+    if CLIP_SLOT == 0 {
+        CLIP
+    } else {
+        slot::clip()
+    }
+}
+
 /// Playback mode, chosen at build time (build.rs: `MOCAP_SAMPLE_US`).
 mod config {
     include!(concat!(env!("OUT_DIR"), "/config.rs"));
 }
-use config::{ENTROPY_BENCH, SAMPLE_US, SERVO, STREAM};
+use config::{CLIP_SLOT, ENTROPY_BENCH, SAMPLE_US, SERVO, STREAM};
 
-/// Whether this build samples with `sample_at` (else it plays every frame with `next_frame`).
-const SAMPLING: bool = SAMPLE_US != 0;
+/// The sampling period in µs: the build's (`MOCAP_SAMPLE_US`), or in a clip-slot build the
+/// slot's; 0 plays every frame.
+fn sample_us() -> u64 {
+    if CLIP_SLOT == 0 {
+        SAMPLE_US
+    } else {
+        slot::sample_us()
+    }
+}
+
+/// The servo output: the build's (`MOCAP_SERVO`), or in a clip-slot build the slot's; 0 none.
+fn servo_output() -> u8 {
+    if CLIP_SLOT == 0 {
+        SERVO
+    } else {
+        slot::servo()
+    }
+}
+
+/// Whether this run samples with `sample_at` (else it plays every frame with `next_frame`).
+fn sampling() -> bool {
+    sample_us() != 0
+}
 
 type Out = Text<Uart>;
 
@@ -207,8 +239,8 @@ enum Failure {
 /// Number of samples in sample mode: t = 0, P, 2P, … up to and including the first t past
 /// `duration_us`, that is ⌊duration / P⌋ + 2.
 fn sample_count(duration_us: u64) -> u64 {
-    // `checked_div`: this also compiles (unused) in frame mode, where SAMPLE_US is 0.
-    duration_us.checked_div(SAMPLE_US).unwrap_or(0) + 2
+    // `checked_div`: this also compiles (unused) in frame mode, where the period is 0.
+    duration_us.checked_div(sample_us()).unwrap_or(0) + 2
 }
 
 /// The output lines of one run: every frame in order (`next_frame`), or in sample mode
@@ -237,7 +269,7 @@ impl Playback {
     /// Produces the next line into `out`; `Ok(false)` once there is none left.
     #[inline(always)]
     fn step(&mut self, out: &mut [i32; MAX_CHANNELS]) -> Result<bool, Failure> {
-        if SAMPLING {
+        if sampling() {
             if self.done {
                 return Ok(false);
             }
@@ -248,7 +280,7 @@ impl Playback {
             if t > self.duration_us {
                 self.done = true;
             } else {
-                self.t_us = t + SAMPLE_US;
+                self.t_us = t + sample_us();
             }
             return Ok(true);
         }
@@ -334,9 +366,10 @@ fn print_pass(clip: &Clip<'static>, text: &mut Out) -> Result<u32, Failure> {
 fn run(text: &mut Out) -> Result<(), Failure> {
     let calibration_ticks = calibrate();
 
-    if CLIP.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
+    let bytes = clip_bytes();
+    if bytes.get(4) == Some(&mocap_decoder::consts::VERSION_SHOW) {
         // A show (SPEC.md §9): its clips share the figure's rig table.
-        let show = decoder_glue::parse_show(CLIP).map_err(|e| Failure::Decoder("parse", e))?;
+        let show = decoder_glue::parse_show(bytes).map_err(|e| Failure::Decoder("parse", e))?;
         let first = show.clip(0).map_err(|e| Failure::Decoder("parse", e))?;
         let rig = servo::playback_of(&first, text)?;
         return servo::drive(
@@ -349,7 +382,7 @@ fn run(text: &mut Out) -> Result<(), Failure> {
         );
     }
     let t0 = ticks::now();
-    let clip = decoder_glue::parse(CLIP).map_err(|e| Failure::Decoder("parse", e))?;
+    let clip = decoder_glue::parse(bytes).map_err(|e| Failure::Decoder("parse", e))?;
     let parse_ticks = ticks::since(t0, ticks::now());
 
     if STREAM {
@@ -358,7 +391,7 @@ fn run(text: &mut Out) -> Result<(), Failure> {
         let rig = servo::figure_playback(text)?;
         return servo::drive(rig, stream::Stream { calibration_ticks }, text);
     }
-    if SERVO != 0 {
+    if servo_output() != 0 {
         return servo::run(&clip, calibration_ticks, text);
     }
     let header_frames = clip.header().frame_count();
@@ -368,9 +401,9 @@ fn run(text: &mut Out) -> Result<(), Failure> {
         .kv("channels", channels as u64)
         .nl();
     let duration_us = clip.header().duration_us();
-    if SAMPLING {
+    if sampling() {
         text.str("# mode=sample")
-            .kv("sample_us", SAMPLE_US)
+            .kv("sample_us", sample_us())
             .kv("samples", sample_count(duration_us))
             .kv("duration_us", duration_us)
             .nl();
@@ -390,7 +423,7 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     let boot_stack_bytes = stack::used_bytes();
     let timing = timed_pass(&clip)?;
     let printed = print_pass(&clip, text)?;
-    if SAMPLING {
+    if sampling() {
         let expected = sample_count(duration_us);
         if u64::from(timing.lines) != expected || u64::from(printed) != expected {
             return Err(Failure::SampleCount {
@@ -408,7 +441,7 @@ fn run(text: &mut Out) -> Result<(), Failure> {
     // ---- statistics (all `# ` lines; excluded from host comparisons)
     let cal = calibration_ticks;
     // Per output line: per frame, or per sample in sample mode.
-    let (count_key, per_key, max_key) = if SAMPLING {
+    let (count_key, per_key, max_key) = if sampling() {
         ("samples", "per_sample", "max_sample")
     } else {
         ("frames", "per_frame", "max_frame")
@@ -455,7 +488,9 @@ fn run(text: &mut Out) -> Result<(), Failure> {
             size_of::<Player<'static, MAX_CHANNELS>>() as u64,
         )
         .nl();
-    text.str("#").kv("flash_clip_bytes", CLIP.len() as u64).nl();
+    text.str("#")
+        .kv("flash_clip_bytes", bytes.len() as u64)
+        .nl();
     text.str("#")
         .kv(
             "stack_bytes_used",

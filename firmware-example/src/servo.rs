@@ -27,7 +27,7 @@ use mocap_servo::pca9685::{self, Address, Pca9685Servos};
 use mocap_servo::record::{DutyRecorder, I2cRecorder, SerialRecorder};
 use mocap_servo::{ssc32, Fit, Identity, OutputError, PlaybackError, ServoBank};
 
-use crate::config::{ESTOP_AT_TICK, POWER, SERVO};
+use crate::config::{ESTOP_AT_TICK, POWER};
 use crate::{decoder_glue, instructions, ticks, Failure, Out};
 
 use crate::figure::{
@@ -356,13 +356,13 @@ pub trait Mode {
     ) -> Result<(), Failure>;
 }
 
-/// Builds the output this firmware was built for (`MOCAP_SERVO`) on its recorder, prints
+/// Builds the output this firmware was built for (`MOCAP_SERVO`, or the clip slot's) on its recorder, prints
 /// its `# output=…` line, and runs `mode` on it.
 pub fn drive<M: Mode>(rig: Rig, mode: M, text: &mut Out) -> Result<(), Failure> {
     let all = rig.outputs();
     let outputs = all.get(..rig.count()).unwrap_or(&[]);
     let invalid = |e| Failure::ServoCrate("output", e);
-    match SERVO {
+    match crate::servo_output() {
         PWM => {
             let channels: [DutyRecorder; PWM_CHANNELS] =
                 core::array::from_fn(|_| DutyRecorder::new(PWM_MAX_DUTY));
