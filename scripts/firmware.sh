@@ -24,8 +24,9 @@
 #       code is the firmware's (0 = every frame decoded), 124 on timeout (default 300 s).
 #       --icount adds `-icount shift=0` so the instruction figures in the output are exact.
 #       Runs that do not measure (no --icount, --m0, --stream, --entropy-bench) of a clip up to
-#       64 KiB play it from the clip slot (firmware-example/src/slot.rs): one build per board and
-#       mode, the clip written into a copy of the ELF; MOCAP_FW_EMBED=1 embeds it instead.
+#       64 KiB with the default figure (no --figure, --policy, --estop-at, --power) play it from
+#       the clip slot (firmware-example/src/slot.rs): one build per board, the clip written into
+#       a copy of the ELF; MOCAP_FW_EMBED=1 embeds it instead.
 #       --figure RIG.toml sets the figure whose hard limits the firmware compiles in
 #       (MOCAP_FIGURE; default assets/rigs/animatronic_demo.toml), --policy
 #       refuse|clamp-if-inside|clamp what it does with a servo clip made for another rig
@@ -240,13 +241,17 @@ stage_inputs() {
 }
 
 # ---- the clip slot (firmware-example/src/slot.rs): `run` plays the clip from a build that does
-# not embed it — one build per board and mode, the clip (and the sampling period) written into the
-# ELF's reserved flash, with the servo output — unless it measures (--icount, --m0), streams, benches the entropy coder,
-# the clip is over SLOT_BYTES or MOCAP_FW_EMBED=1 asks for the embedding build. Rebuilding the
-# firmware for every clip was most of the QEMU tests' time (a build ~10 s, a run ~1 s).
+# not embed it — one build per board, the clip, its sampling period and servo output written into
+# the ELF's reserved flash — unless it measures (--icount, --m0), streams, benches the entropy
+# coder, builds for another figure, policy, e-stop, stream timeout or power schedule (a build of
+# its own anyway, and the slot build, with every output in it, takes ~35 % longer), the clip is
+# over SLOT_BYTES, or MOCAP_FW_EMBED=1 asks for the embedding build. Rebuilding the firmware for
+# every clip was most of the QEMU tests' time (a build ~10 s, a run ~1 s).
 SLOT_BYTES=65536
 USE_SLOT=""
-if [ "$CMD" = run ] && [ "$ICOUNT" -eq 0 ] && [ -z "$STREAM$ENTROPY_BENCH$M0_ON_LM3S${MOCAP_FW_EMBED:-}" ] \
+if [ "$CMD" = run ] && [ "$ICOUNT" -eq 0 ] \
+    && [ -z "$STREAM$ENTROPY_BENCH$M0_ON_LM3S$POLICY$ESTOP_AT$STREAM_TIMEOUT$POWER${MOCAP_FW_EMBED:-}" ] \
+    && [ "$FIGURE" = "$MOCAP_REPO_ROOT/assets/rigs/animatronic_demo.toml" ] \
     && [ -f "$CLIP" ] && [ "$(stat -c %s "$CLIP")" -le "$SLOT_BYTES" ]; then
     USE_SLOT=1
 fi
@@ -283,10 +288,9 @@ build() {
     stage_inputs
     sha="$CLIP_SHA" staged="$STAGED_CLIP" figure_sha="$FIGURE_SHA" staged_figure="$STAGED_FIGURE"
     if [ -n "$USE_SLOT" ]; then
-        # The same build for every clip: the shipped demo embedded (unused), no sampling period.
-        # The servo output too, unless --power (a build setting that needs it) is given.
-        sha="slot$SLOT_BYTES" staged="$FW/clips/demo.mcb" sample_us=""
-        [ -n "$POWER" ] || servo=""
+        # The same build for every clip: the shipped demo embedded (unused), no sampling period,
+        # no servo output (the slot's).
+        sha="slot$SLOT_BYTES" staged="$FW/clips/demo.mcb" sample_us="" servo=""
     fi
 
     mocap_toolchain_setup "$TARGET" >&2 || build_failed "toolchain setup failed (log: $MOCAP_TOOLCHAIN_LOG)"
