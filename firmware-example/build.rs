@@ -169,13 +169,13 @@ fn main() {
     // The player's capacity in words (`Player<N>`; `pca-spline` caches what fits, `mocap encode
     // --target` picks it under a RAM budget): 320 unless `MOCAP_PLAYER_WORDS`.
     let player_words = whole_number("MOCAP_PLAYER_WORDS", 320);
+    if player_words == 0 {
+        fail("mocap-firmware: MOCAP_PLAYER_WORDS must be at least 1");
+    }
     // The clip slot (`MOCAP_CLIP_SLOT=N`, src/slot.rs): N bytes of flash that scripts/firmware.sh
     // writes a clip into after the build, which then plays that clip instead of the embedded one;
     // 0 (unset): the clip is embedded.
     let clip_slot = whole_number("MOCAP_CLIP_SLOT", 0);
-    if player_words == 0 {
-        fail("mocap-firmware: MOCAP_PLAYER_WORDS must be at least 1");
-    }
 
     // Power levels of the servo mode (`MOCAP_POWER`, `mocap play --power`'s schedule, SPEC.md
     // §6.1): none unless set.

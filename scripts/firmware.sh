@@ -274,7 +274,7 @@ slot_fill() {
     cp "$elf" "$out"
     at="$(LC_ALL=C grep -obUaF 'MOCAP-CLIP-SLOT:' "$out" | cut -d: -f1)"
     [[ "$at" =~ ^[0-9]+$ ]] || { rm -f "$out"; build_failed "no single clip slot in $elf"; }
-    local servo=0
+    local servo=0 # MOCAP_SERVO's numbers (firmware-example/build.rs)
     case "$SERVO" in maestro) servo=1 ;; ssc32) servo=2 ;; pwm) servo=3 ;; pca9685) servo=4 ;; esac
     { le "$(stat -c %s "$CLIP")" 4; le "$servo" 1; le 0 3; le "${SAMPLE_US:-0}" 8; cat "$CLIP"; } \
         | dd of="$out" bs=4096 seek="$((at + 16))" oflag=seek_bytes conv=notrunc status=none \

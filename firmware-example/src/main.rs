@@ -40,14 +40,19 @@ const MAX_CHANNELS: usize = config::PLAYER_WORDS;
 /// The clip, chosen at build time (build.rs: `MOCAP_CLIP`, default `clips/demo.mcb`).
 static CLIP: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/clip.mcb"));
 
-/// The clip this run plays: the one compiled in, or in a clip-slot build (`MOCAP_CLIP_SLOT`)
-/// the one written into the slot (`slot.rs`).
-fn clip_bytes() -> &'static [u8] {
+/// A run setting: the build's, or in a clip-slot build (`MOCAP_CLIP_SLOT`) the one written into
+/// the slot (`slot.rs`). `CLIP_SLOT` is a constant, so the embedding build keeps its constants.
+fn built_or_slot<T>(built: T, slot: impl FnOnce() -> T) -> T {
     if CLIP_SLOT == 0 {
-        CLIP
+        built
     } else {
-        slot::clip()
+        slot()
     }
+}
+
+/// The clip this run plays.
+fn clip_bytes() -> &'static [u8] {
+    built_or_slot(CLIP, slot::clip)
 }
 
 /// Playback mode, chosen at build time (build.rs: `MOCAP_SAMPLE_US`).
@@ -56,23 +61,14 @@ mod config {
 }
 use config::{CLIP_SLOT, ENTROPY_BENCH, SAMPLE_US, SERVO, STREAM};
 
-/// The sampling period in µs: the build's (`MOCAP_SAMPLE_US`), or in a clip-slot build the
-/// slot's; 0 plays every frame.
+/// The sampling period in µs (`MOCAP_SAMPLE_US` or the slot's); 0 plays every frame.
 fn sample_us() -> u64 {
-    if CLIP_SLOT == 0 {
-        SAMPLE_US
-    } else {
-        slot::sample_us()
-    }
+    built_or_slot(SAMPLE_US, slot::sample_us)
 }
 
-/// The servo output: the build's (`MOCAP_SERVO`), or in a clip-slot build the slot's; 0 none.
+/// The servo output (`MOCAP_SERVO`'s number or the slot's); 0 none.
 fn servo_output() -> u8 {
-    if CLIP_SLOT == 0 {
-        SERVO
-    } else {
-        slot::servo()
-    }
+    built_or_slot(SERVO, slot::servo)
 }
 
 /// Whether this run samples with `sample_at` (else it plays every frame with `next_frame`).

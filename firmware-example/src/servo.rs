@@ -356,8 +356,8 @@ pub trait Mode {
     ) -> Result<(), Failure>;
 }
 
-/// Builds the output this firmware was built for (`MOCAP_SERVO`, or the clip slot's) on its recorder, prints
-/// its `# output=…` line, and runs `mode` on it.
+/// Builds the output this firmware was built for (`MOCAP_SERVO`, or the clip slot's) on its
+/// recorder, prints its `# output=…` line, and runs `mode` on it.
 pub fn drive<M: Mode>(rig: Rig, mode: M, text: &mut Out) -> Result<(), Failure> {
     let all = rig.outputs();
     let outputs = all.get(..rig.count()).unwrap_or(&[]);

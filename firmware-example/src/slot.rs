@@ -13,7 +13,7 @@
 use crate::config::CLIP_SLOT;
 
 /// What the slot starts with.
-pub const MAGIC: [u8; 16] = *b"MOCAP-CLIP-SLOT:";
+const MAGIC: [u8; 16] = *b"MOCAP-CLIP-SLOT:";
 /// Bytes before the clip.
 const HEAD: usize = 32;
 
